@@ -1,0 +1,43 @@
+# One-step environment, tests and demo. `make env` is idempotent: with nothing changed it is a
+# no-op of a few seconds. Everything runs with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST.
+SHELL := /bin/bash
+PYTHON ?= $(shell command -v python3.11 || command -v python3)
+VENV := .venv
+VPY := $(VENV)/bin/python
+IFACES := $(wildcard icub_interfaces/srv/*.srv icub_interfaces/msg/*.msg) icub_interfaces/CMakeLists.txt icub_interfaces/package.xml
+PKG := setup.py setup.cfg package.xml $(wildcard config/*.yaml)
+export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
+
+.PHONY: env test lint demo bench clean lock
+
+env: $(VENV)/.deps-stamp install/.build-stamp
+
+$(VPY):
+	$(PYTHON) -m venv $(VENV)
+	$(VPY) -m pip install -q --upgrade "pip>=24" "setuptools<80" wheel
+
+$(VENV)/.deps-stamp: requirements/lock.txt | $(VPY)
+	$(VPY) -m pip install -q --disable-pip-version-check -r requirements/lock.txt 2> >(grep -v "^WARNING: Location" >&2)
+	$(VPY) scripts/fix_wheel_cmake.py
+	touch $@
+
+install/.build-stamp: $(VENV)/.deps-stamp $(IFACES) $(PKG)
+	source $(VENV)/bin/activate && export CMAKE_PREFIX_PATH="$$VIRTUAL_ENV" AMENT_PREFIX_PATH="$$VIRTUAL_ENV" && \
+	  colcon --log-base log build --symlink-install --base-paths . icub_interfaces \
+	    --event-handlers console_direct- --cmake-args -DPython3_EXECUTABLE=$(abspath $(VPY)) -DBUILD_TESTING=OFF
+	touch $@
+
+lock:
+	$(VPY) scripts/lock_requirements.py
+
+lint: env
+	scripts/env.sh ruff check icub_pmp icub_sim_bridge test bench
+
+test: env
+	scripts/env.sh scripts/run_tests.sh
+
+demo: env
+	scripts/env.sh scripts/demo.sh
+
+clean:
+	rm -rf build install log

@@ -1,0 +1,34 @@
+"""ament_python package for icub_pmp (entry points = ROS 2 executables)."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = "icub_pmp"
+
+# One entry per node executable (`ros2 run icub_pmp <name>`); module path = icub_pmp.nodes.<name>.
+NODES = [
+    "posture_publisher",
+]
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(include=["icub_pmp", "icub_pmp.*", "icub_sim_bridge", "icub_sim_bridge.*"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+        (f"share/{PACKAGE}/scripts", glob("scripts/*.sh")),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="icub_pmp developers",
+    maintainer_email="icub-pmp@example.org",
+    description="ROS 2 Jazzy iCub node graph: PMP planner, controllers, estimators, MuJoCo sim",
+    license="BSD-3-Clause",
+    entry_points={
+        "console_scripts": [f"{n} = {PACKAGE}.nodes.{n}:main" for n in NODES]
+        + ["icub = icub_pmp.cli.main:main"],
+    },
+)
