@@ -5,6 +5,9 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 VPY := $(VENV)/bin/python
 IFACES := $(wildcard icub_interfaces/srv/*.srv icub_interfaces/msg/*.msg) icub_interfaces/CMakeLists.txt icub_interfaces/package.xml
+# tf2_msgs (TFMessage for /tf): the wheels lack it; built from interfaces/tf2_msgs only where missing.
+IFACES += $(wildcard interfaces/tf2_msgs/msg/*.msg interfaces/tf2_msgs/CMakeLists.txt interfaces/tf2_msgs/package.xml)
+TF2_MSGS = $$(test -e $(VENV)/share/ament_index/resource_index/packages/tf2_msgs || echo interfaces/tf2_msgs)
 PKG := setup.py setup.cfg package.xml $(wildcard config/*.yaml)
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
@@ -23,7 +26,7 @@ $(VENV)/.deps-stamp: requirements/lock.txt | $(VPY)
 
 install/.build-stamp: $(VENV)/.deps-stamp $(IFACES) $(PKG)
 	source $(VENV)/bin/activate && export CMAKE_PREFIX_PATH="$$VIRTUAL_ENV" AMENT_PREFIX_PATH="$$VIRTUAL_ENV" && \
-	  colcon --log-base log build --symlink-install --base-paths . icub_interfaces \
+	  colcon --log-base log build --symlink-install --base-paths . icub_interfaces $(TF2_MSGS) \
 	    --event-handlers console_direct- --cmake-args -DPython3_EXECUTABLE=$(abspath $(VPY)) -DBUILD_TESTING=OFF
 	touch $@
 
