@@ -6,6 +6,7 @@ node can forward ``str(err)`` to a user as a one-line answer.
 
 from __future__ import annotations
 
+import difflib
 from typing import Iterable
 
 __all__ = [
@@ -39,8 +40,12 @@ class UnknownName(InvalidInput):
         self.kind = kind
         self.name = name
         self.valid = sorted(valid)
-        shown = ", ".join(self.valid[:40]) + (" ..." if len(self.valid) > 40 else "")
-        super().__init__(f"unknown {kind} {name!r}; valid: {shown}")
+        if len(self.valid) <= 40:
+            hint = "valid: " + ", ".join(self.valid)
+        else:
+            close = difflib.get_close_matches(str(name), self.valid, n=8, cutoff=0.3)
+            hint = f"{len(self.valid)} valid names, closest: " + ", ".join(close or self.valid[:8])
+        super().__init__(f"unknown {kind} {name!r}; {hint}")
 
 
 class ModelError(IcubPmpError):

@@ -22,6 +22,8 @@ export RMW_IMPLEMENTATION="${RMW_IMPLEMENTATION:-rmw_fastrtps_cpp}"
 export MUJOCO_GL="${MUJOCO_GL:-egl}"
 export PYTHONPATH="$ROOT${PYTHONPATH:+:$PYTHONPATH}"
 export ICUB_PMP_ROOT="$ROOT"
+# the icub command line (console script installed beside the node executables)
+export PATH="$ROOT/install/icub_pmp/lib/icub_pmp:$PATH"
 if [[ $# -eq 0 ]]; then
   echo "usage: scripts/env.sh CMD [ARGS...]" >&2
   exit 2

@@ -67,7 +67,9 @@ class IcubModel:
             raise UnknownName("frame", frame, [f.name for f in self.model.frames])
         return self.model.getFrameId(frame)
 
-    def q_from_dict(self, values: dict[str, float], default: np.ndarray | None = None) -> np.ndarray:
+    def q_from_dict(
+        self, values: dict[str, float], default: np.ndarray | None = None
+    ) -> np.ndarray:
         """Build ``q`` from {joint: value}; names outside the model are ignored (eyes)."""
         q = np.zeros(self.nq) if default is None else np.array(default, dtype=float)
         for n, v in values.items():

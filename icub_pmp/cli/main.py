@@ -1,0 +1,61 @@
+"""The ``icub`` command line: the everyday ros2cli jobs this machine lacks (rclpy only).
+
+    icub graph                     nodes, topics with types, services with types
+    icub echo TOPIC [--count N]    print messages
+    icub hz TOPIC                  measure a topic's rate
+    icub reach right=X,Y,Z ...     send a PMP reach goal to /pmp/reach
+    icub bag record|play|info      MCAP bags (rosbag2 layout)
+
+Each subcommand lives in its own module exposing ``register(subparsers)``; its parser sets
+``func(args) -> int``. Errors print one line ``icub: error: ...`` and exit non-zero.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from typing import Sequence
+
+from icub_pmp.errors import IcubPmpError
+
+__all__ = ["main", "build_parser"]
+
+SUBCOMMANDS = ("graph", "echo", "hz", "reach", "bag")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every installed subcommand registered."""
+    parser = argparse.ArgumentParser(
+        prog="icub", description="Command line of the icub_pmp ROS 2 node graph."
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in SUBCOMMANDS:
+        try:
+            module = importlib.import_module(f"icub_pmp.cli.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"icub_pmp.cli.{name}":
+                continue  # subcommand not installed in this tree
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``icub`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        return 130
+    except (IcubPmpError, TimeoutError, ValueError, OSError) as exc:
+        print(f"icub: error: {exc}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

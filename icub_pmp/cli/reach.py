@@ -1,0 +1,139 @@
+"""``icub reach``: send a PMP reach goal (icub_interfaces/srv/Reach) and print the answer.
+
+    icub reach right=-0.30,0.15,0.05                       # right hand, position only
+    icub reach left=-0.3,-0.1,0.1 right=-0.3,0.1,0.1 --torso --tau 1.5
+    icub reach right=-0.3,0.15,0.05,1,0,0,0 --simulate     # with orientation (qw,qx,qy,qz)
+
+Arguments are checked before anything is sent: a NaN, an unknown hand or a negative tau
+exits with a one-line error and no request.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass, field
+
+from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_spec import HANDS
+
+__all__ = ["register", "run", "ReachGoal", "parse_reach_goal"]
+
+
+@dataclass(frozen=True)
+class ReachGoal:
+    """A validated reach goal: per hand (x, y, z) [m] and optional quaternion (w, x, y, z)."""
+
+    positions: dict[str, tuple[float, float, float]]
+    orientations: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    frame: str = "root_link"
+    use_torso: bool = False
+    tau: float = 0.0
+    simulate_only: bool = False
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``reach`` subcommand."""
+    p = sub.add_parser(
+        "reach",
+        help="send a PMP reach goal to /pmp/reach",
+        description="HAND=X,Y,Z[,QW,QX,QY,QZ] per hand (left, right); positions in metres.",
+    )
+    p.add_argument("targets", nargs="+", metavar="HAND=X,Y,Z[,QW,QX,QY,QZ]")
+    p.add_argument("--frame", default="root_link", help="frame of the targets")
+    p.add_argument("--torso", action="store_true", help="let the torso take part")
+    p.add_argument("--tau", type=float, default=0.0,
+                   help="time-base-generator duration [s] (0 = planner default)")
+    p.add_argument("--simulate", action="store_true",
+                   help="mental simulation: plan only, do not execute")
+    p.add_argument("--service", default="/pmp/reach")
+    p.add_argument("--timeout", type=float, default=10.0, help="wait for the service [s]")
+    p.set_defaults(func=run)
+
+
+def parse_reach_goal(
+    targets: list[str], frame: str = "root_link", use_torso: bool = False,
+    tau: float = 0.0, simulate_only: bool = False,
+) -> ReachGoal:
+    """Validate the command-line goal (raises InvalidInput / UnknownName)."""
+    if not math.isfinite(tau) or tau < 0:
+        raise InvalidInput(f"--tau must be a finite duration >= 0 s, got {tau}")
+    positions: dict[str, tuple[float, float, float]] = {}
+    orientations: dict[str, tuple[float, float, float, float]] = {}
+    for t in targets:
+        hand, sep, values = t.partition("=")
+        if not sep:
+            raise InvalidInput(f"target {t!r}: expected HAND=X,Y,Z[,QW,QX,QY,QZ]")
+        if hand not in HANDS:
+            raise UnknownName("hand", hand, HANDS)
+        if hand in positions:
+            raise InvalidInput(f"hand {hand!r} given twice")
+        try:
+            nums = [float(v) for v in values.split(",")]
+        except ValueError:
+            raise InvalidInput(f"target {t!r}: values must be numbers") from None
+        if len(nums) not in (3, 7):
+            raise InvalidInput(f"target {t!r}: expected 3 (position) or 7 values, got {len(nums)}")
+        if not all(math.isfinite(v) for v in nums):
+            raise InvalidInput(f"target {t!r}: contains NaN or infinite values")
+        positions[hand] = (nums[0], nums[1], nums[2])
+        if len(nums) == 7:
+            q = nums[3:]
+            n = math.sqrt(sum(v * v for v in q))
+            if n < 1e-9:
+                raise InvalidInput(f"target {t!r}: zero quaternion")
+            orientations[hand] = (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+    if orientations and set(orientations) != set(positions):
+        raise InvalidInput("give an orientation for every hand or for none")
+    return ReachGoal(positions, orientations, frame, use_torso, tau, simulate_only)
+
+
+def build_request(goal: ReachGoal):  # noqa: ANN201 - ROS type imported lazily
+    """The icub_interfaces/srv/Reach request for ``goal``."""
+    from icub_interfaces.srv import Reach
+
+    req = Reach.Request()
+    req.hands = [h for h in HANDS if h in goal.positions]
+    req.use_orientation = bool(goal.orientations)
+    req.use_torso = goal.use_torso
+    req.tau = goal.tau
+    req.simulate_only = goal.simulate_only
+    for hand, pos in goal.positions.items():
+        target = req.left_target if hand == "left" else req.right_target
+        target.header.frame_id = goal.frame
+        target.pose.position.x, target.pose.position.y, target.pose.position.z = pos
+        if hand in goal.orientations:
+            w, x, y, z = goal.orientations[hand]
+            o = target.pose.orientation
+            o.w, o.x, o.y, o.z = w, x, y, z
+    return req
+
+
+def run(args: argparse.Namespace) -> int:
+    """Validate, call the service, print the answer; exit 1 if the plan failed."""
+    goal = parse_reach_goal(args.targets, args.frame, args.torso, args.tau, args.simulate)
+    from icub_interfaces.srv import Reach
+    from icub_pmp.cli.session import cli_node, spin_until
+
+    request = build_request(goal)
+    with cli_node("icub_reach") as (node, executor):
+        client = node.create_client(Reach, args.service)
+        if not client.wait_for_service(timeout_sec=args.timeout):
+            raise TimeoutError(
+                f"service {args.service} not available after {args.timeout} s "
+                "(is pmp_planner running in this ROS_DOMAIN_ID?)"
+            )
+        future = client.call_async(request)
+        if not spin_until(executor, future.done, max(args.timeout, 60.0)):
+            raise TimeoutError(f"service {args.service} gave no answer")
+        res = future.result()
+    print(f"success: {res.success}")
+    print(f"message: {res.message}")
+    for hand, r in zip(res.hands, res.residuals):
+        print(f"residual {hand}: {r * 1000:.2f} mm")
+    n = len(res.trajectory.points)
+    if n:
+        last = res.trajectory.points[-1].time_from_start
+        print(f"trajectory: {n} points over {last.sec + last.nanosec * 1e-9:.3f} s, "
+              f"{len(res.trajectory.joint_names)} joints")
+    return 0 if res.success else 1

@@ -1,0 +1,79 @@
+"""A short-lived rclpy node for one CLI command, and QoS matching for echo/hz/record."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import time
+import uuid
+from typing import Callable, Iterator
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "matching_qos"]
+
+
+@contextlib.contextmanager
+def cli_node(prefix: str = "icub_cli") -> Iterator[tuple[Node, SingleThreadedExecutor]]:
+    """An anonymous node in its own context (DDS kept on localhost), shut down on exit."""
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    ctx = Context()
+    rclpy.init(context=ctx)
+    node = Node(f"{prefix}_{uuid.uuid4().hex[:8]}", context=ctx)
+    executor = SingleThreadedExecutor(context=ctx)
+    executor.add_node(node)
+    try:
+        yield node, executor
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown(context=ctx)
+
+
+def spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool], timeout: float) -> bool:
+    """Spin until ``done()`` or ``timeout`` s (``timeout <= 0``: forever). Returns done()."""
+    deadline = time.monotonic() + timeout if timeout > 0 else float("inf")
+    while not done() and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
+    return done()
+
+
+def wait_for_topic_type(
+    node: Node, executor: SingleThreadedExecutor, topic: str, timeout: float
+) -> str | None:
+    """The type name ('pkg/msg/Type') of ``topic`` once it has a publisher, else None."""
+    found: list[str] = []
+
+    def check() -> bool:
+        for name, types in node.get_topic_names_and_types():
+            if name == topic and types and node.count_publishers(topic) > 0:
+                found.append(types[0])
+                return True
+        return False
+
+    spin_until(executor, check, timeout)
+    return found[0] if found else None
+
+
+def matching_qos(node: Node, topic: str, depth: int = 100) -> QoSProfile:
+    """A subscription QoS compatible with every current publisher of ``topic``.
+
+    Reliable only if all publishers are reliable; transient local only if all publishers are
+    (so latched topics such as /robot_description are received).
+    """
+    infos = node.get_publishers_info_by_topic(topic)
+    reliable = bool(infos) and all(
+        i.qos_profile.reliability == ReliabilityPolicy.RELIABLE for i in infos
+    )
+    latched = bool(infos) and all(
+        i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos
+    )
+    return QoSProfile(
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )
