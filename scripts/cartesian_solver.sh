@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the cartesian_solver node with config/cartesian_solver.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" cartesian_solver "$@"

@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the motion_segmenter node with config/motion_segmenter.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" motion_segmenter "$@"

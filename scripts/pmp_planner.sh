@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the pmp_planner node with config/pmp_planner.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" pmp_planner "$@"

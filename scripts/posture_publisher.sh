@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the posture_publisher node with config/posture_publisher.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" posture_publisher "$@"

@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the robot_state_publisher node with config/robot_state_publisher.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" robot_state_publisher "$@"

@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the sim_bridge node with config/sim_bridge.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" sim_bridge "$@"

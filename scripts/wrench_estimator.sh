@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the wrench_estimator node with config/wrench_estimator.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" wrench_estimator "$@"
