@@ -34,7 +34,7 @@ lock:
 	$(VPY) scripts/lock_requirements.py
 
 lint: env
-	scripts/env.sh ruff check icub_pmp icub_sim_bridge test bench
+	scripts/env.sh ruff check icub_pmp icub_sim_bridge test $(wildcard bench) scripts
 
 test: env
 	scripts/env.sh scripts/run_tests.sh

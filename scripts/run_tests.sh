@@ -5,7 +5,9 @@ set -eo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 echo "== ruff"
-ruff check icub_pmp icub_sim_bridge test bench
+LINT=()
+for d in icub_pmp icub_sim_bridge test bench scripts; do [[ -e "$d" ]] && LINT+=("$d"); done
+ruff check "${LINT[@]}"
 echo "== pytest"
 set +e
 python -m pytest -q -p no:cacheprovider "$@"
