@@ -6,8 +6,16 @@ Launch-free integration testing: nodes run as real subprocesses (through
 DDS through an in-process :class:`RosProbe`.
 """
 
+from icub_pmp.testing.node_graph import NodeGraph
 from icub_pmp.testing.node_process import NodeProcess, repo_root
 from icub_pmp.testing.probe import RosProbe
 from icub_pmp.testing.ros_domain import reserve_domain_id, ros_environment
 
-__all__ = ["NodeProcess", "RosProbe", "reserve_domain_id", "ros_environment", "repo_root"]
+__all__ = [
+    "NodeGraph",
+    "NodeProcess",
+    "RosProbe",
+    "reserve_domain_id",
+    "ros_environment",
+    "repo_root",
+]
