@@ -1,0 +1,158 @@
+"""IkProblem: eq 11 of the reaching paper as a CasADi NLP for one chain (built, not solved).
+
+    q_d = argmin_q  w_o ||alpha_d - K_alpha(q)||^2 + beta (q_rest - q)^T W (q_rest - q)
+          s.t.      ||x_d - K_x(q)||^2 <= epsilon,   q_L <= q <= q_U,   lb <= C q <= ub
+
+Position is the constraint (higher priority), orientation and rest posture are in the cost.
+The orientation distance is written on rotation matrices, ``1/2 ||R_d - R(q)||_F^2 =
+2 (1 - cos theta)`` with theta the angle of ``R_d^T R(q)``: it equals theta^2 (the squared
+axis-angle distance of eq 11) to second order, is smooth everywhere (the axis-angle map is not
+at theta = 0) and has its only minimum at theta = 0. The squared position error is expressed
+in cm^2 inside the NLP so that IPOPT's absolute ``constr_viol_tol`` is meaningful; epsilon and
+all weights are run-time parameters or bounds, so changing them never rebuilds the problem.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import os
+
+# IPOPT's linear solver (MUMPS) is built with OpenMP; on a 10-variable problem its thread pool
+# costs more than it gives (about 20 % per solve measured here). Must be set before the IPOPT
+# plugin loads; a value set by the user wins.
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import casadi as ca  # noqa: E402
+import numpy as np  # noqa: E402
+
+from icub_pmp.cartesian.arm_linear_constraints import ArmLinearConstraints
+from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
+from icub_pmp.cartesian.ik_config import IkConfig
+from icub_pmp.cartesian.kinematic_chain import KinematicChain
+from icub_pmp.cartesian.nlp_codegen import compiled_nlpsol
+from icub_pmp.kinematics.robot_model import IcubModel
+
+__all__ = ["IkProblem", "POSITION_SCALE"]
+
+_LOG = logging.getLogger(__name__)
+POSITION_SCALE = 1e4  # m^2 -> cm^2 for the position constraint inside the NLP
+
+
+@dataclasses.dataclass(frozen=True)
+class _Layout:
+    """Slices of the parameter vector p."""
+
+    x_d: slice
+    R_d: slice
+    w_ori: slice
+    w_rest: slice
+    q_rest: slice
+    q_fixed: slice
+    size: int
+
+
+class IkProblem:
+    """The eq 11 NLP of ``chain``: symbols, bounds, and the IPOPT solver (built once).
+
+    Attributes:
+        chain: the :class:`KinematicChain`.
+        kinematics: the :class:`CasadiKinematics` of the chain's hand frame.
+        q: SX decision variables (n,) [rad] (the chain's optimised joints).
+        f, g: SX objective and constraints (g[0] = squared position error [cm^2], then C q).
+        lbx, ubx: joint limits (n,) [rad] from the URDF.
+        linear: the linear constraints (C, lb, ub) over ``q`` (empty when disabled).
+        solver: the CasADi ``nlpsol`` (IPOPT, exact Hessian).
+        compiled: whether the NLP functions run as compiled C.
+    """
+
+    def __init__(self, model: IcubModel, chain: KinematicChain, config: IkConfig):
+        self.chain = chain
+        self.config = config
+        self.kinematics = CasadiKinematics(model, chain.frame, chain.fk_joints)
+        n, nf = chain.n, len(chain.fixed_joints)
+        sizes = (("x_d", 3), ("R_d", 9), ("w_ori", 1), ("w_rest", n), ("q_rest", n))
+        sizes += (("q_fixed", nf),)
+        slices, i = {}, 0
+        for name, k in sizes:
+            slices[name] = slice(i, i + k)
+            i += k
+        self.layout = _Layout(size=i, **slices)
+        self.p = ca.SX.sym("p", i)
+        self.q = ca.SX.sym("q", n)
+        p, L = self.p, self.layout
+        q_fk = ca.vertcat(p[L.q_fixed], self.q)  # fixed joints are the torso: first in fk order
+        fk_pos, fk_rot = self.kinematics.function(q_fk)
+        x_d = p[L.x_d]
+        R_d = ca.reshape(p[L.R_d], 3, 3)
+        self.position_error_sq = ca.sumsqr(x_d - fk_pos)
+        orientation = 0.5 * ca.sumsqr(R_d - fk_rot)
+        rest = ca.dot(p[L.w_rest], (p[L.q_rest] - self.q) ** 2)
+        self.f = p[L.w_ori] * orientation + rest
+        idx = model.indices(chain.joints)
+        self.lbx = model.lower[idx].copy()
+        self.ubx = model.upper[idx].copy()
+        if config.shoulder_constraints:
+            self.linear = ArmLinearConstraints(chain.hand).over(chain.joints)
+        else:
+            self.linear = None
+        g = [POSITION_SCALE * self.position_error_sq]
+        if self.linear is not None:
+            g.append(ca.DM(self.linear.C) @ self.q)
+        self.g = ca.vertcat(*g)
+        opts = {
+            "ipopt.print_level": 0,
+            "ipopt.sb": "yes",
+            "print_time": False,
+            "error_on_fail": False,
+            "ipopt.hessian_approximation": "exact",
+            "ipopt.tol": config.tol,
+            "ipopt.constr_viol_tol": config.constraint_tolerance * POSITION_SCALE,
+            "ipopt.acceptable_iter": 0,
+            "ipopt.mu_strategy": "adaptive",
+            "ipopt.max_iter": config.max_iter,
+            "ipopt.max_wall_time": config.max_solve_time,
+        }
+        nlp = {"x": self.q, "p": self.p, "f": self.f, "g": self.g}
+        name = f"ik_{chain.name}{'_lin' if self.linear is not None else ''}"
+        if config.codegen:
+            self.solver, self.compiled = compiled_nlpsol(name, nlp, opts)
+        else:
+            self.solver, self.compiled = ca.nlpsol(name, "ipopt", nlp, opts), False
+
+    # ------------------------------------------------------------------ run-time data
+    def parameters(
+        self,
+        x_d: np.ndarray,
+        R_d: np.ndarray | None,
+        w_ori: float,
+        w_rest: np.ndarray,
+        q_rest: np.ndarray,
+        q_fixed: np.ndarray,
+    ) -> np.ndarray:
+        """Parameter vector p for a target (x_d (3,) [m], R_d (3, 3) or None) and weights."""
+        L = self.layout
+        p = np.zeros(L.size)
+        p[L.x_d] = x_d
+        p[L.R_d] = (np.eye(3) if R_d is None else np.asarray(R_d)).flatten(order="F")
+        p[L.w_ori] = 0.0 if R_d is None else w_ori
+        p[L.w_rest] = w_rest
+        p[L.q_rest] = q_rest
+        p[L.q_fixed] = q_fixed
+        return p
+
+    def g_bounds(self, epsilon: float) -> tuple[np.ndarray, np.ndarray]:
+        """(lbg, ubg): position bound epsilon [m^2] (scaled), then the linear constraints."""
+        lbg, ubg = [-np.inf], [epsilon * POSITION_SCALE]
+        if self.linear is not None:
+            lbg += list(self.linear.lb)
+            ubg += list(self.linear.ub)
+        return np.array(lbg), np.array(ubg)
+
+    def linear_violation(self, q: np.ndarray) -> float:
+        """Largest violation [rad] of joint limits and linear constraints at ``q`` (n,)."""
+        v = max(0.0, float(np.max(self.lbx - q)), float(np.max(q - self.ubx)))
+        if self.linear is not None:
+            c = self.linear.C @ q
+            v = max(v, float(np.max(self.linear.lb - c)), float(np.max(c - self.linear.ub)))
+        return v

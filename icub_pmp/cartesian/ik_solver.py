@@ -1,0 +1,194 @@
+"""IkSolver: eq 11 solved by IPOPT for any of the four chains, chosen at run time.
+
+Mirrors iKinCartesianSolver (Sect. 4 of the reaching paper): position as a constraint,
+orientation and rest posture in the cost, joint limits and the iCub shoulder constraints,
+warm-started from the current joints, IPOPT bounded in iterations and wall time. Problems are
+built lazily, once per chain (:meth:`problem`), and reused for every solve.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from icub_pmp.cartesian.ik_config import IkConfig
+from icub_pmp.cartesian.ik_problem import IkProblem
+from icub_pmp.cartesian.ik_solution import IkSolution
+from icub_pmp.cartesian.kinematic_chain import CHAIN_NAMES, KinematicChain
+from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_model import IcubModel
+
+__all__ = ["IkSolver", "rotation_angle"]
+
+_CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+
+def rotation_angle(R_a: np.ndarray, R_b: np.ndarray) -> float:
+    """Angle [rad] of the rotation between two rotation matrices (0 .. pi)."""
+    c = (float(np.trace(np.asarray(R_a).T @ np.asarray(R_b))) - 1.0) / 2.0
+    return math.acos(min(1.0, max(-1.0, c)))
+
+
+class IkSolver:
+    """Cartesian solver (eq 11) over the iCub upper-body model.
+
+    Args:
+        model: the pinocchio model (built from config/robot.yaml when omitted).
+        config: solver parameters.
+    """
+
+    def __init__(self, model: IcubModel | None = None, config: IkConfig | None = None):
+        self.model = model or IcubModel()
+        self.config = config or IkConfig()
+        self._problems: dict[str, IkProblem] = {}
+        self._q_rest_full = self.model.posture(self.config.rest_posture)
+
+    # ------------------------------------------------------------------ build
+    def problem(self, chain: str) -> IkProblem:
+        """The (cached) NLP of ``chain``; builds it on first use."""
+        if chain not in CHAIN_NAMES:
+            raise UnknownName("chain", chain, CHAIN_NAMES)
+        if chain not in self._problems:
+            kc = KinematicChain.from_name(chain, self.model.spec)
+            self._problems[chain] = IkProblem(self.model, kc, self.config)
+        return self._problems[chain]
+
+    def rest_weights(self, chain: KinematicChain) -> np.ndarray:
+        """beta * diag(W) over the chain's optimised joints."""
+        w = dict(zip(chain.fk_joints[:3], self.config.rest_joint_weights_torso))
+        w.update(zip(chain.fk_joints[3:], self.config.rest_joint_weights_arm))
+        return self.config.rest_weight * np.array([w[j] for j in chain.joints])
+
+    # ------------------------------------------------------------------ solve
+    def solve(
+        self,
+        chain: str,
+        position: np.ndarray,
+        rotation: np.ndarray | None = None,
+        q_start: np.ndarray | None = None,
+        *,
+        orientation_weight: float | None = None,
+        epsilon: float | None = None,
+    ) -> IkSolution:
+        """Solve eq 11 for the hand of ``chain``.
+
+        Args:
+            chain: one of ``left_arm``, ``right_arm``, ``torso_left_arm``, ``torso_right_arm``.
+            position: target x_d (3,) [m] in root_link.
+            rotation: target orientation ``R_root_hand`` (3, 3), or None for position only.
+            q_start: full model configuration (nq,) [rad] (IcubModel order): the warm start,
+                and the values of the joints the chain holds (the torso of a 7-DoF chain).
+                Default: the rest posture.
+            orientation_weight: overrides the configured weight (>= 0).
+            epsilon: overrides the configured squared position tolerance [m^2] (> 0).
+
+        Raises:
+            UnknownName: unknown chain. InvalidInput: NaN/inf, bad shapes, non-rotation.
+        """
+        prob = self.problem(chain)
+        x_d = _vector(position, 3, "position")
+        R_d = None if rotation is None else _rotation(rotation)
+        q_full = self._q_rest_full if q_start is None else self.model.check_q(q_start)
+        w_ori = self.config.orientation_weight if orientation_weight is None else orientation_weight
+        if not (math.isfinite(w_ori) and w_ori >= 0):
+            raise InvalidInput(f"orientation_weight: expected a finite value >= 0, got {w_ori}")
+        eps = self.config.epsilon if epsilon is None else epsilon
+        if not (math.isfinite(eps) and eps > 0):
+            raise InvalidInput(f"epsilon: expected a finite value > 0 [m^2], got {eps}")
+        kc = prob.chain
+        idx = self.model.indices(kc.joints)
+        q_fixed = q_full[self.model.indices(kc.fixed_joints)] if kc.fixed_joints else []
+        p = prob.parameters(
+            x_d, R_d, w_ori, self.rest_weights(kc), self._q_rest_full[idx], np.asarray(q_fixed)
+        )
+        lbg, ubg = prob.g_bounds(eps)
+        x0 = np.clip(q_full[idx], prob.lbx, prob.ubx)
+        t0 = time.perf_counter()
+        try:
+            res = prob.solver(x0=x0, p=p, lbx=prob.lbx, ubx=prob.ubx, lbg=lbg, ubg=ubg)
+            stats = prob.solver.stats()
+            q = np.array(res["x"], dtype=float).reshape(-1)
+            status = str(stats.get("return_status", "unknown"))
+            iterations = int(stats.get("iter_count", 0))
+        except RuntimeError as exc:  # CasADi raises on evaluation errors (NaN in functions)
+            q, status, iterations = x0, "exception", 0
+            status_detail = str(exc).splitlines()[0] if str(exc) else "error"
+        else:
+            status_detail = status
+        dt = time.perf_counter() - t0
+        if not np.all(np.isfinite(q)):
+            q, status = x0, "exception"
+        q = np.clip(q, prob.lbx, prob.ubx)  # IPOPT relaxes bounds by ~1e-8 rad
+        return self._evaluate(prob, q, x_d, R_d, q_fixed, eps, dt, iterations, status,
+                              status_detail)
+
+    def _evaluate(self, prob, q, x_d, R_d, q_fixed, eps, dt, iterations, status, detail):
+        pos, rot = prob.kinematics.pose(np.concatenate([np.asarray(q_fixed, float), q]))
+        perr = float(np.linalg.norm(x_d - pos))
+        oerr = math.nan if R_d is None else rotation_angle(R_d, rot)
+        viol = prob.linear_violation(q)
+        tol_pos = math.sqrt(eps + self.config.constraint_tolerance)
+        feasible = perr <= tol_pos * (1 + 1e-9) and viol <= 1e-6
+        converged = status in _CONVERGED
+        if feasible:
+            msg = f"position error {perr * 1e3:.3f} mm"
+            if R_d is not None:
+                msg += f", orientation error {math.degrees(oerr):.3f} deg"
+            if not converged:
+                msg += f" (IPOPT stopped early: {detail})"
+        elif perr > tol_pos:
+            msg = (
+                f"target not reached: position error {perr * 1e3:.2f} mm > "
+                f"{tol_pos * 1e3:.2f} mm (unreachable for chain {prob.chain.name}?); "
+                f"IPOPT: {detail}"
+            )
+        else:
+            msg = f"constraints violated by {viol:.2e} rad; IPOPT: {detail}"
+        return IkSolution(
+            success=bool(feasible),
+            converged=converged,
+            chain=prob.chain.name,
+            joint_names=prob.chain.joints,
+            q=q,
+            position=pos,
+            rotation=rot,
+            position_error=perr,
+            orientation_error=oerr,
+            constraint_violation=viol,
+            solve_time=dt,
+            iterations=iterations,
+            status=status,
+            message=msg,
+        )
+
+    def full_q(self, solution: IkSolution, q_start: np.ndarray | None = None) -> np.ndarray:
+        """Full model configuration (nq,): ``q_start`` with the chain's joints from ``solution``."""
+        q = np.array(self._q_rest_full if q_start is None else self.model.check_q(q_start))
+        q[self.model.indices(solution.joint_names)] = solution.q
+        return q
+
+
+def _vector(v, n: int, name: str) -> np.ndarray:
+    try:
+        a = np.asarray(v, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"{name}: expected {n} numbers, got {v!r}") from None
+    if a.shape != (n,):
+        raise InvalidInput(f"{name}: expected {n} values, got {a.size}")
+    if not np.all(np.isfinite(a)):
+        raise InvalidInput(f"{name}: contains NaN or infinite values: {a.tolist()}")
+    return a
+
+
+def _rotation(R) -> np.ndarray:
+    try:
+        R = np.asarray(R, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"rotation: expected a 3x3 matrix, got {R!r}") from None
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise InvalidInput(f"rotation: expected a finite 3x3 matrix, got shape {R.shape}")
+    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+        raise InvalidInput("rotation: not a rotation matrix (R^T R != I or det < 0)")
+    return R
