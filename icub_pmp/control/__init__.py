@@ -1,0 +1,28 @@
+"""Control: the 1 kHz joint impedance controller of the iCub boards (eqs 4-7 of the
+force-control paper): torque PID, impedance law, set-points from trajectories, velocity
+commands and holds, safety. :mod:`icub_pmp.control.sim_loop` closes it in-process with the
+simulator and the wrench estimator (imported on demand: it needs MuJoCo)."""
+
+from icub_pmp.control.impedance_controller import STATUSES, ControlOutput, ImpedanceController
+from icub_pmp.control.impedance_controller_config import (
+    FEEDFORWARDS,
+    MODES,
+    ImpedanceControllerConfig,
+)
+from icub_pmp.control.joint_trajectory import JointTrajectory, TrajectorySample
+from icub_pmp.control.setpoint_generator import Setpoint, SetpointGenerator
+from icub_pmp.control.torque_pid import TorquePid
+
+__all__ = [
+    "STATUSES",
+    "ControlOutput",
+    "ImpedanceController",
+    "FEEDFORWARDS",
+    "MODES",
+    "ImpedanceControllerConfig",
+    "JointTrajectory",
+    "TrajectorySample",
+    "Setpoint",
+    "SetpointGenerator",
+    "TorquePid",
+]

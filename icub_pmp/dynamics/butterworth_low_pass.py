@@ -1,0 +1,68 @@
+"""ButterworthLowPass: a second-order Butterworth low-pass filter over a vector, one sample at a
+time (direct form II transposed, coefficients from ``scipy.signal.butter``)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+from icub_pmp.errors import InvalidInput
+
+__all__ = ["ButterworthLowPass"]
+
+
+class ButterworthLowPass:
+    """2nd-order Butterworth low-pass on an (n,) signal sampled at ``rate_hz``.
+
+    ``cutoff_hz`` = 0 makes the filter a pass-through. The state starts at the steady state of
+    the first sample (no start-up transient). Low-frequency group delay is about
+    ``0.225 / cutoff_hz`` [s] (``sqrt(2) / (2 pi fc)``).
+    """
+
+    def __init__(self, n: int, cutoff_hz: float, rate_hz: float):
+        if n < 1:
+            raise InvalidInput(f"ButterworthLowPass: n must be >= 1, got {n}")
+        if rate_hz <= 0 or not np.isfinite(rate_hz):
+            raise InvalidInput(f"ButterworthLowPass: rate_hz must be > 0, got {rate_hz}")
+        if cutoff_hz < 0 or cutoff_hz >= rate_hz / 2:
+            raise InvalidInput(
+                f"ButterworthLowPass: cutoff_hz must be in [0, {rate_hz / 2}) "
+                f"(Nyquist of {rate_hz} Hz), got {cutoff_hz}"
+            )
+        self.n = n
+        self.cutoff_hz = float(cutoff_hz)
+        self.rate_hz = float(rate_hz)
+        self.enabled = cutoff_hz > 0
+        if self.enabled:
+            b, a = signal.butter(2, cutoff_hz, btype="low", fs=rate_hz)
+            self._b = b / a[0]
+            self._a = a / a[0]
+            self._zi_unit = signal.lfilter_zi(self._b, self._a)
+        self._z: np.ndarray | None = None  # (2, n) filter state
+        self._y = np.zeros(n)
+
+    def reset(self) -> None:
+        """Forget the state; the next sample re-initialises it."""
+        self._z = None
+
+    @property
+    def value(self) -> np.ndarray:
+        """The last output (n,) (read-only view)."""
+        v = self._y.view()
+        v.flags.writeable = False
+        return v
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """Filter one sample ``x`` (n,) and return the output (n,) (a new array)."""
+        x = np.asarray(x, dtype=float)
+        if not self.enabled:
+            self._y = x.copy()
+            return self._y.copy()
+        if self._z is None:
+            self._z = np.outer(self._zi_unit, x)
+        b, a, z = self._b, self._a, self._z
+        y = b[0] * x + z[0]
+        z[0] = b[1] * x - a[1] * y + z[1]
+        z[1] = b[2] * x - a[2] * y
+        self._y = y
+        return y.copy()

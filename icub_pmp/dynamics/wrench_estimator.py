@@ -1,0 +1,259 @@
+"""WrenchEstimator: joint torques, external hand wrenches and contact flags from the joint
+states and the arm FT sensors (the wholeBodyDynamics / iDyn role, Sect. 3 of the paper).
+
+Per sample, with the graph of Fig. 4b (the FT sensors cut the arms, contacts only at the hands,
+kinematics from the fixed base, gravity from the model or the IMU):
+
+1. joint velocities / accelerations filtered (:class:`JointStateFilter`);
+2. RNEA with no external wrench (eqs 8-10) predicts the internal wrench ``w_i`` through each
+   FT sensor (plus the RFRR residual when enabled);
+3. eq 2: the external wrench at the hand ``w_e = -X_hand<-sensor (w_s - w_i)``: the excess
+   wrench the shoulder applies through the sensor balances the environment's wrench on the
+   distal arm; it is moved to the hand frame (force unchanged, moment ``mu - r_se x f``);
+4. RNEA again with ``w_e`` on the hands gives the joint torques ``tau_hat`` (eq 3's
+   ``J^T w_e`` folded into the recursion): for the joints proximal to the sensors (shoulder,
+   torso) this is exactly the measured FT wrench propagated to the joints;
+5. contact flag per hand (:class:`ContactDetector`, hysteresis on |f_e|);
+6. optionally the RFRR (:class:`RandomFeaturesRidge`) learns ``w_s - w_i,model`` from
+   (q, q_dot, q_ddot) of torso + arm on contact-free samples.
+
+Units: N, N m, rad; wrenches (6,) = [force, torque]. External wrenches are those the
+environment applies to the hand, about the hand frame origin (``l_hand_dh_frame``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping, NamedTuple
+
+import numpy as np
+import pinocchio as pin
+
+from icub_pmp.dynamics.butterworth_low_pass import ButterworthLowPass
+from icub_pmp.dynamics.contact_detector import ContactDetector
+from icub_pmp.dynamics.ft_dynamics_model import FtDynamicsModel
+from icub_pmp.dynamics.joint_state_filter import FilteredState, JointStateFilter
+from icub_pmp.dynamics.random_features_ridge import RandomFeaturesRidge
+from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
+from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
+
+__all__ = ["WrenchEstimator", "WrenchEstimate"]
+
+
+class WrenchEstimate(NamedTuple):
+    """One estimator output (time ``t`` [s]).
+
+    ``tau``: joint torques (nq,) [N m] over :attr:`WrenchEstimator.joint_names`;
+    ``ext_hand`` / ``ext_root``: {hand: (6,)} external wrench on the hand about its origin,
+    in the hand frame / in root_link axes; ``contact``: {hand: bool};
+    ``ft_measured`` / ``ft_predicted``: {hand: (6,)} FT wrench as measured (filtered, offset
+    removed) and as predicted without external wrench (model + RFRR), in the sensor frame and
+    the sensor's sign convention; ``state``: the filtered joint state used.
+    """
+
+    t: float
+    tau: np.ndarray
+    ext_hand: dict[str, np.ndarray]
+    ext_root: dict[str, np.ndarray]
+    contact: dict[str, bool]
+    ft_measured: dict[str, np.ndarray]
+    ft_predicted: dict[str, np.ndarray]
+    state: FilteredState
+
+
+class WrenchEstimator:
+    """The estimator core (no ROS). Feed :meth:`update` one sample at a time."""
+
+    def __init__(self, config: WrenchEstimatorConfig | None = None, spec: RobotSpec | None = None):
+        self.config = cfg = config or WrenchEstimatorConfig()
+        self.spec = spec or RobotSpec.load()
+        mismatch = {cfg.mismatch_link: cfg.mismatch_scale} if cfg.mismatch_link else {}
+        self.model = FtDynamicsModel(self.spec, mismatch)
+        if not self.model.model.existFrame(cfg.imu_frame):
+            raise UnknownName("frame", cfg.imu_frame, [f.name for f in self.model.model.frames])
+        self.joint_names = self.model.joint_names
+        self.nq = self.model.nq
+        self._sign = 1.0 if cfg.ft_convention == "parent_on_child" else -1.0
+        self._filter = JointStateFilter(
+            self.nq, cfg.rate_hz, cfg.velocity_cutoff_hz, cfg.acceleration_cutoff_hz
+        )
+        self._ft_filter = {h: ButterworthLowPass(6, cfg.ft_cutoff_hz, cfg.rate_hz) for h in HANDS}
+        self._imu_filter = ButterworthLowPass(3, cfg.imu_cutoff_hz, cfg.rate_hz)
+        self._contact = {
+            h: ContactDetector(cfg.contact_force_on, cfg.contact_force_off,
+                               cfg.contact_min_samples)
+            for h in HANDS
+        }
+        # RFRR inputs per hand: torso + arm joints (q, q_dot, q_ddot) -> 30 inputs, 6 outputs
+        self._rfrr_idx = {
+            h: self.model.indices(self.spec.torso_joints + self.spec.arm_joints(h)) for h in HANDS
+        }
+        n_in = 3 * len(self._rfrr_idx["left"])
+        n_j = len(self._rfrr_idx["left"])
+        scale = np.concatenate([
+            np.full(n_j, cfg.rfrr_position_scale),
+            np.full(n_j, cfg.rfrr_velocity_scale),
+            np.full(n_j, cfg.rfrr_acceleration_scale),
+        ])
+        self.rfrr = {
+            h: RandomFeaturesRidge(
+                n_in, 6, cfg.rfrr_features, cfg.rfrr_bandwidth, cfg.rfrr_ridge,
+                cfg.rfrr_forgetting, scale, cfg.rfrr_seed + k,
+            )
+            for k, h in enumerate(HANDS)
+        }
+        self.rfrr_enabled = cfg.rfrr_enabled
+        self.rfrr_learning = cfg.rfrr_learning
+        self._offset = {h: np.zeros(6) for h in HANDS}
+        self._offset_acc = {h: np.zeros(6) for h in HANDS}
+        self._offset_n = 0
+        self._samples = 0
+        self._last_contact = {h: False for h in HANDS}
+
+    # ------------------------------------------------------------------ helpers
+    def reset(self) -> None:
+        """Forget filter states, contact flags and the offset calibration (not the RFRR)."""
+        self._filter.reset()
+        for f in self._ft_filter.values():
+            f.reset()
+        self._imu_filter.reset()
+        for c in self._contact.values():
+            c.reset()
+        self.calibrate_offsets()
+        self._samples = 0
+
+    def calibrate_offsets(self) -> None:
+        """Restart the FT offset calibration (``ft_offset_samples`` contact-free samples)."""
+        self._offset = {h: np.zeros(6) for h in HANDS}
+        self._offset_acc = {h: np.zeros(6) for h in HANDS}
+        self._offset_n = 0
+
+    @property
+    def offsets(self) -> dict[str, np.ndarray]:
+        """Current FT offsets {hand: (6,)} in the sensor's convention (measured - model)."""
+        return {h: self._sign * o for h, o in self._offset.items()}
+
+    def rfrr_input(self, hand: str, state: FilteredState) -> np.ndarray:
+        """RFRR input (30,) of ``hand``: torso + arm q, q_dot, q_ddot."""
+        i = self._rfrr_idx[hand]
+        return np.concatenate([state.q[i], state.v[i], state.a[i]])
+
+    def predict_ft(
+        self, q: np.ndarray, v: np.ndarray | None = None, a: np.ndarray | None = None
+    ) -> dict[str, np.ndarray]:
+        """Model-predicted FT wrenches {hand: (6,)} with null external wrenches, in the
+        sensor's sign convention (no RFRR, no offsets)."""
+        r = self.model.rnea(self._check(q, "q"), v, a)
+        return {h: self._sign * w for h, w in r.sensor.items()}
+
+    def _check(self, x: np.ndarray, name: str) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        if x.shape != (self.nq,):
+            raise InvalidInput(f"{name}: expected shape ({self.nq},), got {x.shape}")
+        if not math.isfinite(float(x.sum())):
+            raise InvalidInput(f"{name}: contains NaN or infinite values")
+        return x
+
+    def _gravity_from_imu(self, q: np.ndarray, acc: np.ndarray) -> None:
+        acc = np.asarray(acc, dtype=float)
+        if acc.shape != (3,) or not np.all(np.isfinite(acc)):
+            raise InvalidInput(f"imu acceleration: expected 3 finite values, got {acc!r}")
+        acc_f = self._imu_filter(acc)
+        self.model.forward(q)
+        r_root_imu = self.model.frame_rotation(self.config.imu_frame)
+        # an accelerometer at rest measures -g (specific force): g_root = -R_root_imu acc
+        self.model.set_gravity(-(r_root_imu @ acc_f))
+
+    # ------------------------------------------------------------------ main step
+    def update(
+        self,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray | None,
+        ft: Mapping[str, np.ndarray],
+        imu_acc: np.ndarray | None = None,
+    ) -> WrenchEstimate:
+        """Process one sample at time ``t`` [s].
+
+        ``q`` (nq,) [rad], ``v`` (nq,) [rad/s] or None (differentiated), ``ft`` {hand: (6,)}
+        measured FT wrenches in the sensor frame (both hands), ``imu_acc`` (3,) [m/s^2] the
+        IMU linear acceleration (used when ``gravity_source == 'imu'``).
+        """
+        q = self._check(q, "q")
+        if v is not None:
+            v = self._check(v, "v")
+        meas = {}
+        for h in HANDS:
+            try:
+                w = np.asarray(ft[h], dtype=float)
+            except (KeyError, TypeError):
+                raise InvalidInput(f"ft: missing the {h} arm wrench (need {HANDS})") from None
+            if w.shape != (6,) or not math.isfinite(float(w.sum())):
+                raise InvalidInput(f"ft[{h!r}]: expected 6 finite values, got {w!r}")
+            meas[h] = self._sign * self._ft_filter[h](w)  # -> parent_on_child
+        cfg = self.config
+        if cfg.gravity_source == "imu":
+            if imu_acc is None:
+                raise InvalidInput("gravity_source is 'imu' but no IMU acceleration was given")
+            self._gravity_from_imu(q, imu_acc)
+        state = self._filter.update(t, q, v)
+        model = self.model
+        model._load(state.q, state.v, state.a)
+        model._rnea_loaded(None)
+        free = model.sensor_wrenches()
+        self._samples += 1
+
+        # internal wrench: model (+ learnt residual), then offsets during calibration
+        w_int = free
+        x_in = {}
+        if self.rfrr_enabled or self.rfrr_learning:
+            w_int = {}
+            for h in HANDS:
+                x_in[h] = self.rfrr_input(h, state)
+                w_int[h] = free[h] + self.rfrr[h].predict(x_in[h]) if self.rfrr_enabled \
+                    else free[h]
+        if self._offset_n < cfg.ft_offset_samples:
+            self._offset_n += 1
+            for h in HANDS:
+                self._offset_acc[h] += meas[h] - w_int[h]
+                self._offset[h] = self._offset_acc[h] / self._offset_n
+        if self._offset_n:
+            for h in HANDS:
+                meas[h] = meas[h] - self._offset[h]
+
+        # eq 2: external wrench at the hand
+        pin.forwardKinematics(model.model, model.data, model._q)
+        ext_hand, ext_root = {}, {}
+        for h in HANDS:
+            diff = pin.Force(meas[h] - w_int[h])  # = -(external wrench) at the sensor
+            t_sh, t_rh = model.hand_placements(h)
+            w_e = -t_sh.actInv(diff).vector
+            ext_hand[h] = w_e
+            r = t_rh.rotation
+            ext_root[h] = np.concatenate((r @ w_e[:3], r @ w_e[3:]))
+
+        # joint torques with the estimated hand wrenches (eq 3 folded into RNEA)
+        tau = model._rnea_loaded(ext_hand)
+        contact = {h: self._contact[h].update(ext_hand[h][:3]) for h in HANDS}
+
+        # RFRR learning on contact-free samples (never while calibrating offsets)
+        if (
+            self.rfrr_learning
+            and self._offset_n >= cfg.ft_offset_samples
+            and self._samples % cfg.rfrr_update_every == 0
+        ):
+            for h in HANDS:
+                if not contact[h] and not self._last_contact[h]:
+                    self.rfrr[h].update(x_in[h], meas[h] - free[h])
+        self._last_contact = contact
+        return WrenchEstimate(
+            t=float(t),
+            tau=tau,
+            ext_hand=ext_hand,
+            ext_root=ext_root,
+            contact=contact,
+            ft_measured={h: self._sign * meas[h] for h in HANDS},
+            ft_predicted={h: self._sign * w_int[h] for h in HANDS},
+            state=state,
+        )
