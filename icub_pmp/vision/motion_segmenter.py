@@ -1,0 +1,352 @@
+"""MotionSegmenter: independent-motion segmentation from Lucas-Kanade failures (motionCUT).
+
+Sect. 5 of Metta, Natale, Nori, Sandini, "Force control and reaching movements on the iCub
+humanoid robot": LK optical flow is run on a fixed, uniform grid of image points; for each
+point ``p`` with estimated flow ``v`` the discrepancy of eq. 13
+
+    M(p) = sum_{q in W} (I_t(p + q) - I_{t+1}(p + v + q))^2
+
+says whether tracking succeeded (``M < Theta_M``) or failed (``M >= Theta_M``). Fast motion
+(of the object or of the camera) is absorbed by the LK pyramid; failures from local rotation
+and occlusion (cover/uncover at an object's border) mark motion independent of the observer.
+Isolated failures are filtered out (a failing node needs failing grid neighbours), kept nodes
+persist a few frames and are grouped into 8-connected blobs on the grid.
+
+The pipeline as coded in motionCUT (``ICUB_FACTS.md`` 1c) is followed, with eq. 13 evaluated
+explicitly (OpenCV's own LK error is a mean absolute difference, not eq. 13).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from icub_pmp.vision.image_checks import to_gray
+from icub_pmp.vision.motion_blobs import MotionBlob, MotionBlobs
+from icub_pmp.vision.motion_segmenter_config import MotionSegmenterConfig
+
+__all__ = ["MotionSegmenter"]
+
+_NEIGHBOURS_8 = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.float32)
+
+
+class MotionSegmenter:
+    """Stateful motion segmenter for one camera: feed frames in order with :meth:`process`.
+
+    The grid is fixed: every frame the same grid points of frame t are tracked into frame t+1.
+    State kept between frames: the previous grey image, the previous patches of eq. 13 and
+    the persistence counters of the grid nodes.
+    """
+
+    def __init__(self, config: MotionSegmenterConfig | None = None):
+        self.config = config or MotionSegmenterConfig()
+        c = self.config
+        self.grid_shape: tuple[int, int] = c.grid_shape
+        rows, cols = self.grid_shape
+        s = c.grid_step
+        x0, y0 = c.grid_origin
+        self.grid_origin = (x0, y0)
+        gy, gx = np.mgrid[0:rows, 0:cols]
+        #: (rows*cols, 2) float32 node positions (u, v) [px], row-major over the grid.
+        self.nodes = np.stack([x0 + gx * s, y0 + gy * s], axis=-1).reshape(-1, 2).astype(np.float32)
+        self.nodes.setflags(write=False)
+        half = c.win_size // 2
+        qy, qx = np.mgrid[-half : half + 1, -half : half + 1]
+        # All eq. 13 patches tiled in one (rows*w, cols*w) image, patch of node (r, c) at
+        # [r*w:(r+1)*w, c*w:(c+1)*w] (a wide layout keeps OpenCV's remap vectorised).
+        gx_n = self.nodes[:, 0].reshape(rows, cols)
+        gy_n = self.nodes[:, 1].reshape(rows, cols)
+        self._map_x = _tile(gx_n[:, :, None, None] + qx[None, None]).astype(np.float32)
+        self._map_y = _tile(gy_n[:, :, None, None] + qy[None, None]).astype(np.float32)
+        self._patch_flat_idx = (
+            self._map_y.astype(np.intp) * c.image_width + self._map_x.astype(np.intp)
+        )
+        border = np.zeros(self.grid_shape, bool)
+        border[0, :] = border[-1, :] = border[:, 0] = border[:, -1] = True
+        self._border = border
+        self._criteria = (
+            cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS,
+            c.lk_max_iter,
+            c.lk_epsilon,
+        )
+        e = 2 * c.mask_erosion + 1
+        self._erode_kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (e, e))
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        """Forget the previous frame and the persistence counters (e.g. after a stream gap)."""
+        self._prev_gray: np.ndarray | None = None
+        self._prev_patches: np.ndarray | None = None
+        self._prev_texture: np.ndarray | None = None
+        self._ttl = np.zeros(self.grid_shape, np.int32)
+        self._frame_index = -1
+
+    # ------------------------------------------------------------------ main step
+    def process(self, image: np.ndarray) -> MotionBlobs:
+        """Segment independent motion between the previous frame and ``image``.
+
+        Args:
+            image: (H, W) uint8 grey or (H, W, 3) uint8 RGB, of the configured size.
+
+        Returns:
+            The blobs of this frame (none on the first frame).
+
+        Raises:
+            InvalidInput: wrong dtype, channels or size (state unchanged).
+        """
+        c = self.config
+        gray = to_gray(image, c.image_width, c.image_height)
+        self._frame_index += 1
+        patches = gray.ravel()[self._patch_flat_idx]
+        rows, cols = self.grid_shape
+        if self._prev_gray is None:
+            self._store(gray, patches)
+            return self._result(
+                (),
+                np.zeros((c.image_height, c.image_width), np.uint8),
+                np.zeros(self.grid_shape, bool),
+                np.zeros(self.grid_shape, bool),
+                np.full((rows, cols, 2), np.nan, np.float32),
+                np.zeros(self.grid_shape, np.float32),
+            )
+        failures, flow, disc, tracked = self._failures(self._prev_gray, gray)
+        self._store(gray, patches)
+        kept = self._neighbour_filter(failures)
+        self._ttl = np.where(kept, c.frames_persistence, np.maximum(self._ttl - 1, 0))
+        active = self._ttl > 0
+        if c.grow_by_flow and active.any():
+            moving, reliable = self._ego_residual(flow, tracked & ~failures)
+            # persisted nodes now tracked like the background have left the object
+            left = active & ~kept & reliable & ~moving
+            self._ttl[left] = 0
+            active &= ~left
+            active = self._grow(active, moving)
+        labels, blobs = self._blobs(active, flow)
+        mask = self._mask(labels)
+        return self._result(blobs, mask, failures, labels > 0, flow, disc)
+
+    def _store(self, gray: np.ndarray, patches: np.ndarray) -> None:
+        self._prev_gray = gray
+        self._prev_patches = patches
+        rows, cols = self.grid_shape
+        f = patches.astype(np.float32)
+        mean = cv2.resize(f, (cols, rows), interpolation=cv2.INTER_AREA)
+        sq = cv2.resize(f * f, (cols, rows), interpolation=cv2.INTER_AREA)
+        self._prev_texture = np.sqrt(np.maximum(sq - mean * mean, 0.0)).ravel()
+
+    def _result(self, blobs, mask, failures, active, flow, disc) -> MotionBlobs:
+        return MotionBlobs(
+            frame_index=self._frame_index,
+            blobs=tuple(blobs),
+            mask=mask,
+            failures=failures,
+            active=active,
+            flow=flow,
+            discrepancy=disc,
+        )
+
+    # ------------------------------------------------------------------ eq. 13
+    def discrepancy(self, image_next: np.ndarray, flow: np.ndarray) -> np.ndarray:
+        """Eq. 13 divided by |W| for every node, against the stored previous frame.
+
+        Args:
+            image_next: (H, W) uint8 grey frame t+1.
+            flow: (N, 2) flow v of each node [px] (N = number of grid nodes).
+
+        Returns:
+            (N,) float32 ``M(p) / |W|`` [grey level^2]; bilinear interpolation at ``p + v``.
+        """
+        if self._prev_patches is None:
+            raise RuntimeError("discrepancy() needs a previous frame: call process() first")
+        rows, cols = self.grid_shape
+        w = self.config.win_size
+        v = np.asarray(flow, np.float32).reshape(rows, cols, 2)
+        vx = np.repeat(np.repeat(v[:, :, 0], w, axis=0), w, axis=1)
+        vy = np.repeat(np.repeat(v[:, :, 1], w, axis=0), w, axis=1)
+        nxt = cv2.remap(
+            image_next,
+            self._map_x + vx,
+            self._map_y + vy,
+            cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_REPLICATE,
+        )
+        # OpenCV rounds bilinear samples of uint8 images to integers: fine for a threshold.
+        diff = cv2.subtract(self._prev_patches, nxt, dtype=cv2.CV_32F)
+        # INTER_AREA by an integer factor = exact mean of each w x w patch: M(p) / |W|
+        sq = cv2.multiply(diff, diff)
+        return cv2.resize(sq, (cols, rows), interpolation=cv2.INTER_AREA).ravel()
+
+    def _failures(
+        self, prev_gray: np.ndarray, gray: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Eq. 13 test of every node: (failures, flow, M/|W|, tracked) on the grid.
+
+        ``tracked``: LK found the node, its patch is textured and its track stays inside.
+        """
+        c = self.config
+        rows, cols = self.grid_shape
+        p0 = self.nodes.reshape(-1, 1, 2)
+        p1, status, _err = cv2.calcOpticalFlowPyrLK(
+            prev_gray,
+            gray,
+            p0,
+            None,
+            winSize=(c.win_size, c.win_size),
+            maxLevel=c.pyramid_levels,
+            criteria=self._criteria,
+        )
+        found = status.ravel().astype(bool)
+        v = (p1.reshape(-1, 2) - self.nodes).astype(np.float32)
+        v[~np.isfinite(v).all(axis=1)] = 0.0
+        half = c.win_size // 2
+        end = self.nodes + v
+        inside = (
+            (end[:, 0] >= half)
+            & (end[:, 1] >= half)
+            & (end[:, 0] < c.image_width - 1 - half)
+            & (end[:, 1] < c.image_height - 1 - half)
+        )
+        disc = self.discrepancy(gray, np.where(found[:, None], v, 0.0))
+        textured = self._prev_texture >= c.min_texture
+        lk_fail = ~found if c.lk_status_is_failure else np.zeros_like(found)
+        fail = textured & inside & ((found & (disc >= c.theta_m)) | lk_fail)
+        fail = fail.reshape(rows, cols) & ~self._border
+        flow = np.where(found[:, None], v, np.nan).reshape(rows, cols, 2).astype(np.float32)
+        tracked = (found & textured & inside).reshape(rows, cols)
+        return fail, flow, disc.reshape(rows, cols).astype(np.float32), tracked
+
+    # ------------------------------------------------------------------ filters
+    def _neighbour_filter(self, failures: np.ndarray) -> np.ndarray:
+        """Failures with at least ``adj_nodes_thres`` failing 8-neighbours."""
+        f = failures.astype(np.float32)
+        counts = cv2.filter2D(f, -1, _NEIGHBOURS_8, borderType=cv2.BORDER_CONSTANT)
+        return failures & (counts >= self.config.adj_nodes_thres - 0.5)
+
+    def _ego_residual(self, flow: np.ndarray, reliable: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        """Nodes whose LK flow contradicts the ego-motion: (moving, reliable) grids.
+
+        Ego-motion = homography fitted with RANSAC (tolerance ``flow_tol``) to the flow of the
+        reliable nodes (tracked, textured, no eq. 13 failure); exact for a rotating camera and
+        close to it for the small eye translation of a turning head. ``moving``: tracked
+        nodes whose flow differs from it by ``flow_tol`` or more.
+        """
+        c = self.config
+        rows, cols = self.grid_shape
+        none = np.zeros(self.grid_shape, bool)
+        v = flow.reshape(-1, 2)
+        ok = reliable.ravel()
+        if ok.sum() < 8:
+            return none, none
+        src = self.nodes[ok]
+        h, _ = cv2.findHomography(src, src + v[ok], cv2.RANSAC, c.flow_tol)
+        if h is None:
+            return none, none
+        pred = cv2.perspectiveTransform(self.nodes[None], h)[0] - self.nodes
+        res = np.linalg.norm(np.nan_to_num(v - pred, nan=0.0), axis=1)
+        moving = ((res >= c.flow_tol) & np.isfinite(v).all(axis=1)).reshape(rows, cols)
+        return moving & ~self._border, reliable
+
+    def _grow(self, active: np.ndarray, moving: np.ndarray) -> np.ndarray:
+        """Extend the blobs that pass ``blob_min_size`` over adjacent ``moving`` nodes.
+
+        The interior of a textured object that translates is tracked well (no eq. 13
+        failure): only its border fails. Growth starts only from blobs motionCUT would
+        report, so it never creates a blob in a scene without one.
+        """
+        c = self.config
+        rows, cols = self.grid_shape
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(
+            active.astype(np.uint8), connectivity=8
+        )
+        big = np.nonzero(stats[:, cv2.CC_STAT_AREA] > c.blob_min_size)[0]
+        big = big[big > 0]
+        if big.size == 0:
+            return active
+        grown = np.isin(labels, big)
+        kernel = np.ones((3, 3), np.uint8)
+        for _ in range(rows + cols):
+            nxt = grown | (cv2.dilate(grown.astype(np.uint8), kernel).astype(bool) & moving)
+            if (nxt == grown).all():
+                break
+            grown = nxt
+        return active | grown
+
+    def _blobs(self, active: np.ndarray, flow: np.ndarray) -> tuple[np.ndarray, list[MotionBlob]]:
+        """8-connected components of the ON nodes (holes filled), sorted by size."""
+        c = self.config
+        grid = active.astype(np.uint8)
+        if c.fill_holes and grid.any():
+            grid = _fill_holes(grid)
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(grid, connectivity=8)
+        s = c.grid_step
+        x0, y0 = self.grid_origin
+        half = s // 2
+        out: list[tuple[int, MotionBlob]] = []
+        relabel = np.zeros(n, np.int32)
+        candidates = [k for k in range(1, n) if stats[k, cv2.CC_STAT_AREA] > c.blob_min_size]
+        candidates.sort(key=lambda k: -stats[k, cv2.CC_STAT_AREA])
+        for rank, k in enumerate(candidates, start=1):
+            relabel[k] = rank
+            rr, cc = np.nonzero(labels == k)
+            u = x0 + cc * s
+            v = y0 + rr * s
+            fl = flow[rr, cc]
+            good = np.isfinite(fl).all(axis=1)
+            mf = fl[good].mean(axis=0) if good.any() else np.zeros(2)
+            size = int(rr.size)
+            out.append(
+                (
+                    rank,
+                    MotionBlob(
+                        centroid=(float(u.mean()), float(v.mean())),
+                        size=size,
+                        area=size * s * s,
+                        bbox=(
+                            int(u.min() - half),
+                            int(v.min() - half),
+                            int(u.max() - half + s - 1),
+                            int(v.max() - half + s - 1),
+                        ),
+                        mean_flow=(float(mf[0]), float(mf[1])),
+                    ),
+                )
+            )
+        return relabel[labels], [b for _, b in out]
+
+    def _mask(self, labels: np.ndarray) -> np.ndarray:
+        """Paint each ON node of a kept blob as a grid_step x grid_step cell (255), then
+        erode by ``mask_erosion`` px (the windows' overhang)."""
+        c = self.config
+        mask = np.zeros((c.image_height, c.image_width), np.uint8)
+        if not labels.any():
+            return mask
+        s = c.grid_step
+        rows, cols = self.grid_shape
+        cells = np.repeat(np.repeat((labels > 0).astype(np.uint8) * 255, s, axis=0), s, axis=1)
+        x0, y0 = self.grid_origin
+        u0, v0 = x0 - s // 2, y0 - s // 2
+        mask[v0 : v0 + rows * s, u0 : u0 + cols * s] = cells[
+            : c.image_height - v0, : c.image_width - u0
+        ]
+        if c.mask_erosion > 0:
+            mask = cv2.erode(mask, self._erode_kernel)
+        return mask
+
+
+def _fill_holes(grid: np.ndarray) -> np.ndarray:
+    """Set to 1 the 0-regions (4-connected) of a uint8 grid that do not touch its border."""
+    inv = (grid == 0).astype(np.uint8)
+    _, labels = cv2.connectedComponents(inv, connectivity=4)
+    edge = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    holes = (labels > 0) & ~np.isin(labels, edge)
+    out = grid.copy()
+    out[holes] = 1
+    return out
+
+
+def _tile(a: np.ndarray) -> np.ndarray:
+    """(rows, cols, w, w) patches -> one (rows*w, cols*w) image."""
+    rows, cols, h, w = a.shape
+    return np.ascontiguousarray(a.transpose(0, 2, 1, 3).reshape(rows * h, cols * w))
