@@ -5,6 +5,7 @@ iCub); no ROS imports.
 """
 
 from icub_pmp.cartesian.arm_linear_constraints import ArmLinearConstraints, LinearConstraints
+from icub_pmp.cartesian.cartesian_node_config import CartesianNodeConfig
 from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
 from icub_pmp.cartesian.dls_solver import DlsConfig, DlsSolver
 from icub_pmp.cartesian.ik_config import IkConfig
@@ -20,6 +21,7 @@ from icub_pmp.cartesian.sampled_trajectory import GeneratorState, SampledTraject
 __all__ = [
     "ArmLinearConstraints",
     "LinearConstraints",
+    "CartesianNodeConfig",
     "CasadiKinematics",
     "DlsConfig",
     "DlsSolver",

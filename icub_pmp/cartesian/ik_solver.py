@@ -46,6 +46,19 @@ class IkSolver:
         self._q_rest_full = self.model.posture(self.config.rest_posture)
 
     # ------------------------------------------------------------------ build
+    _BUILD_FIELDS = (
+        "constraint_tolerance", "shoulder_constraints", "tol", "max_iter", "max_solve_time",
+        "codegen",
+    )
+
+    def reconfigure(self, config: IkConfig) -> None:
+        """Use ``config`` from now on; the built problems are kept unless a field they are
+        built with changed (epsilon, weights and rest posture never need a rebuild)."""
+        if any(getattr(config, f) != getattr(self.config, f) for f in self._BUILD_FIELDS):
+            self._problems.clear()
+        self.config = config
+        self._q_rest_full = self.model.posture(config.rest_posture)
+
     def problem(self, chain: str) -> IkProblem:
         """The (cached) NLP of ``chain``; builds it on first use."""
         if chain not in CHAIN_NAMES:

@@ -1,0 +1,271 @@
+"""cartesian_solver: the iKinCartesianSolver + cartesianController role as a ROS 2 node.
+
+Services
+- ``/cartesian/solve_pose`` (icub_interfaces/srv/SolvePose): eq 11 solved by IPOPT
+  (:class:`~icub_pmp.cartesian.IkSolver`); answers joints, residuals, solve time; moves nothing.
+- ``/cartesian/go_to_pose`` (icub_interfaces/srv/GoToPose): the same solve, then a
+  multi-referential minimum-jerk trajectory (:class:`~icub_pmp.cartesian.MinJerkGenerator`)
+  published on ``/joint_trajectory`` for the impedance controller. A goal given while a
+  trajectory of the same chain runs starts from that trajectory's state at the current time,
+  so the motion bends smoothly toward the new target.
+
+Subscribes ``/joint_states`` (start configuration). Parameters: the fields of
+:class:`IkConfig`, :class:`MinJerkConfig` and :class:`CartesianNodeConfig`
+(config/cartesian_solver.yaml), validated when set at run time. Bad requests answer
+``success=false`` with a message (and the residual when a solve ran); the node never dies on
+them, and IPOPT is bounded in iterations and wall time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+import rclpy
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.time import Time
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
+
+from icub_interfaces.srv import GoToPose, SolvePose
+from icub_pmp.cartesian import (
+    CartesianNodeConfig,
+    IkConfig,
+    IkSolution,
+    IkSolver,
+    KinematicChain,
+    MinJerkConfig,
+    MinJerkGenerator,
+    SampledTrajectory,
+)
+from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_model import IcubModel
+from icub_pmp.kinematics.robot_spec import RobotSpec
+from icub_pmp.nodes.conversions import (
+    arrays_to_trajectory,
+    joint_state_field,
+    make_joint_state,
+    point_to_array,
+    pose_to_arrays,
+    quat_wxyz_to_matrix,
+    validate_joint_state,
+)
+
+__all__ = ["CartesianSolverNode", "main"]
+
+_CONFIGS = (IkConfig, MinJerkConfig, CartesianNodeConfig)
+
+
+@dataclasses.dataclass
+class _Active:
+    """The trajectory last published: start time, samples, chain, held configuration."""
+
+    start: Time
+    trajectory: SampledTrajectory
+    chain: str
+    q_hold: np.ndarray
+    generator: MinJerkGenerator
+
+
+class CartesianSolverNode(Node):
+    """Serve /cartesian/solve_pose and /cartesian/go_to_pose; publish /joint_trajectory."""
+
+    def __init__(self) -> None:
+        super().__init__("cartesian_solver")
+        for cls in _CONFIGS:
+            for f in dataclasses.fields(cls):
+                default = getattr(cls(), f.name)
+                value = list(default) if isinstance(default, tuple) else default
+                self.declare_parameter(f.name, value, ParameterDescriptor(description=cls.__name__))
+        try:
+            self.ik_config, self.mj_config, self.node_config = self._configs({})
+        except IcubPmpError as exc:
+            raise SystemExit(f"cartesian_solver: bad parameters: {exc}") from exc
+        self.model = IcubModel()
+        self.solver = IkSolver(self.model, self.ik_config)
+        for chain in self.node_config.prebuild_chains:
+            prob = self.solver.problem(chain)
+            self.get_logger().info(
+                f"built the eq 11 NLP of {chain} ({prob.chain.n} DoF, "
+                f"{'compiled C' if prob.compiled else 'CasADi VM'})"
+            )
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self._latest: dict[str, float] | None = None
+        self._active: _Active | None = None
+        self.create_subscription(
+            JointState, "joint_states", self._on_joint_states, qos_profile_sensor_data
+        )
+        self.traj_pub = self.create_publisher(
+            JointTrajectory,
+            "joint_trajectory",
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE),
+        )
+        self.create_service(SolvePose, "cartesian/solve_pose", self._on_solve_pose)
+        self.create_service(GoToPose, "cartesian/go_to_pose", self._on_go_to_pose)
+        self.get_logger().info(
+            "serving /cartesian/solve_pose and /cartesian/go_to_pose "
+            f"(default chain {self.node_config.default_chain})"
+        )
+
+    # ------------------------------------------------------------------ parameters
+    def _configs(
+        self, changes: dict[str, Any]
+    ) -> tuple[IkConfig, MinJerkConfig, CartesianNodeConfig]:
+        params = {}
+        for cls in _CONFIGS:
+            for f in dataclasses.fields(cls):
+                params[f.name] = self.get_parameter(f.name).value
+        params.update(changes)
+        ik = IkConfig.from_dict(params, ignore_unknown=True)
+        mj = MinJerkConfig.from_dict(params, ignore_unknown=True)
+        nc = CartesianNodeConfig.from_dict(params, ignore_unknown=True)
+        RobotSpec.load().posture(ik.rest_posture)  # raises UnknownName for a bad posture
+        return ik, mj, nc
+
+    def _on_set_parameters(self, params: list) -> SetParametersResult:
+        names = {f.name for cls in _CONFIGS for f in dataclasses.fields(cls)}
+        changes = {p.name: p.value for p in params if p.name in names}
+        if not changes:
+            return SetParametersResult(successful=True)
+        try:
+            ik, mj, nc = self._configs(changes)
+        except IcubPmpError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        self.solver.reconfigure(ik)
+        self.ik_config, self.mj_config, self.node_config = ik, mj, nc
+        return SetParametersResult(successful=True)
+
+    # ------------------------------------------------------------------ inputs
+    def _on_joint_states(self, msg: JointState) -> None:
+        try:
+            validate_joint_state(msg)
+        except InvalidInput as exc:
+            self.get_logger().warning(
+                f"dropping /joint_states: {exc}", throttle_duration_sec=5.0
+            )
+            return
+        self._latest = joint_state_field(msg)
+
+    def _start_q(self, start_state: JointState) -> np.ndarray:
+        """Full configuration (nq,) from the request's start_state or the latest joints."""
+        base = self.model.posture("rest")
+        if self._latest is not None:
+            base = self.model.q_from_dict(self._latest, default=base)
+        if len(start_state.name) > 0:
+            validate_joint_state(start_state)
+            return self.model.q_from_dict(joint_state_field(start_state), default=base)
+        if self._latest is None:
+            raise InvalidInput("no /joint_states received yet and the request has no start_state")
+        return base
+
+    def _target(self, req: Any) -> tuple[str, np.ndarray, np.ndarray | None]:
+        chain = req.chain or self.node_config.default_chain
+        KinematicChain.from_name(chain, self.model.spec)  # raises UnknownName
+        frame = req.target.header.frame_id
+        if frame not in ("", self.model.spec.root_frame):
+            raise UnknownName("target frame", frame, ("", self.model.spec.root_frame))
+        if req.use_orientation:
+            position, quat = pose_to_arrays(req.target.pose)
+            return chain, position, quat_wxyz_to_matrix(quat)
+        return chain, point_to_array(req.target.pose.position), None
+
+    # ------------------------------------------------------------------ services
+    def _fill(self, resp: Any, sol: IkSolution) -> None:
+        resp.success = bool(sol.success)
+        resp.message = sol.message
+        resp.solution = make_joint_state(sol.joint_names, position=sol.q)
+        resp.position_error = float(sol.position_error)
+        resp.orientation_error = float(sol.orientation_error)
+        resp.solve_time = float(sol.solve_time)
+        resp.iterations = int(sol.iterations)
+        resp.solver_status = sol.status
+
+    def _on_solve_pose(self, req: SolvePose.Request, resp: SolvePose.Response):
+        try:
+            chain, position, rotation = self._target(req)
+            sol = self.solver.solve(chain, position, rotation, self._start_q(req.start_state))
+            self._fill(resp, sol)
+        except IcubPmpError as exc:
+            resp.success, resp.message = False, str(exc)
+            resp.position_error = resp.orientation_error = math.nan
+        except Exception as exc:  # never let a request kill the node
+            self.get_logger().error(f"solve_pose failed unexpectedly: {exc!r}")
+            resp.success, resp.message = False, f"internal error: {exc!r}"
+        return resp
+
+    def _on_go_to_pose(self, req: GoToPose.Request, resp: GoToPose.Response):
+        try:
+            self._go_to_pose(req, resp)
+        except IcubPmpError as exc:
+            resp.success, resp.message = False, str(exc)
+            if not resp.solver_status:
+                resp.position_error = resp.orientation_error = math.nan
+        except Exception as exc:  # never let a request kill the node
+            self.get_logger().error(f"go_to_pose failed unexpectedly: {exc!r}")
+            resp.success, resp.message = False, f"internal error: {exc!r}"
+        return resp
+
+    def _go_to_pose(self, req: GoToPose.Request, resp: GoToPose.Response) -> None:
+        T = float(req.trajectory_time) or self.mj_config.trajectory_time
+        if not (math.isfinite(T) and T >= 10 * self.mj_config.period):
+            raise InvalidInput(
+                f"trajectory_time: expected 0 (default) or >= {10 * self.mj_config.period} s, "
+                f"got {req.trajectory_time}"
+            )
+        chain, position, rotation = self._target(req)
+        now = self.get_clock().now()
+        state = None
+        act = self._active
+        if act is not None and act.chain == chain and len(req.start_state.name) == 0:
+            elapsed = (now - act.start).nanoseconds * 1e-9
+            if 0.0 <= elapsed < act.trajectory.duration:
+                state = act.trajectory.state_at(elapsed)
+        if state is not None:
+            q_start = act.q_hold.copy()
+            q_start[self.model.indices(act.trajectory.joint_names)] = state.q
+        else:
+            q_start = self._start_q(req.start_state)
+        sol = self.solver.solve(chain, position, rotation, q_start)
+        self._fill(resp, sol)
+        if not sol.success:
+            return
+        gen = MinJerkGenerator(self.model, self.solver.problem(chain).chain, self.mj_config, T)
+        gen.reset(q_start)
+        if state is not None:
+            gen.restore(state)
+        gen.set_target(sol.q)
+        traj = gen.rollout()
+        msg = arrays_to_trajectory(traj.joint_names, traj.t, traj.q, traj.qd, stamp=now.to_msg())
+        self.traj_pub.publish(msg)
+        self._active = _Active(now, traj, chain, q_start, gen)
+        resp.trajectory = msg
+        resp.message = (
+            f"{sol.message}; trajectory of {len(traj.t)} points over {traj.duration:.2f} s"
+            + (" (continued from the running one)" if state is not None else "")
+        )
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point (``ros2 run icub_pmp cartesian_solver``)."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = CartesianSolverNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ConfigError as exc:
+        raise SystemExit(f"cartesian_solver: {exc}") from exc
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()
