@@ -1,0 +1,281 @@
+"""The eq 11 Cartesian solver (IkSolver, CasADi + IPOPT) and the DLS baseline."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from icub_pmp.cartesian import (
+    ArmLinearConstraints,
+    CartesianNodeConfig,
+    DlsSolver,
+    IkConfig,
+    IkSolver,
+    KinematicChain,
+    MinJerkConfig,
+)
+from icub_pmp.config import config_dir
+from icub_pmp.errors import ConfigError, InvalidInput, UnknownName
+from icub_pmp.kinematics import IcubModel
+
+CHAIN = "torso_right_arm"
+
+
+@pytest.fixture(scope="module")
+def model() -> IcubModel:
+    return IcubModel()
+
+
+@pytest.fixture(scope="module")
+def solver(model) -> IkSolver:
+    # the CasADi VM (no C compilation) keeps the suite fast; test_codegen_* covers gcc
+    return IkSolver(model, IkConfig(codegen=False))
+
+
+def _targets(model, n, seed, hand="right", torso=True):
+    """Hand poses of configurations drawn uniformly in the joint limits that meet the arm
+    constraints (torso at 0 when ``torso`` is False)."""
+    chain = KinematicChain.from_name(KinematicChain.named(hand, True))
+    alc = ArmLinearConstraints(hand)
+    idx = model.indices(chain.joints)
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        q = model.random_q(rng)
+        if not torso:
+            q[model.indices(chain.joints[:3])] = 0.0
+        if alc.violation(chain.joints, q[idx]) == 0.0:
+            out.append(model.frame_pose(q, chain.frame))
+    return out
+
+
+def test_reachable_poses_solved_within_epsilon_and_limits(model, solver):
+    """Random reachable poses (10-DoF): position within sqrt(epsilon + tol), orientation within
+    1 deg, joints inside their limits and the shoulder constraints met."""
+    cfg = solver.config
+    prob = solver.problem(CHAIN)
+    for T in _targets(model, 8, seed=1):
+        for rot in (None, T.rotation):
+            sol = solver.solve(CHAIN, T.translation, rot)
+            assert sol.success, sol.message
+            assert sol.position_error <= math.sqrt(cfg.epsilon + cfg.constraint_tolerance) + 1e-12
+            assert sol.position_error ** 2 <= cfg.epsilon + cfg.constraint_tolerance
+            assert np.all(sol.q >= prob.lbx) and np.all(sol.q <= prob.ubx)
+            assert sol.constraint_violation <= 1e-6
+            if rot is not None:
+                assert math.degrees(sol.orientation_error) < 1.0
+            else:
+                assert math.isnan(sol.orientation_error)
+            # the reported pose is the FK of the reported joints (pinocchio)
+            q = solver.full_q(sol)
+            np.testing.assert_allclose(model.frame_position(q, prob.chain.frame), sol.position,
+                                       atol=1e-9)
+
+
+def test_orientation_error_decreases_with_its_weight(model, solver):
+    """With a strong rest-posture pull, the orientation error shrinks as its weight grows."""
+    pulled = IkSolver(model, IkConfig(codegen=False, rest_weight=0.5,
+                                      rest_joint_weights_arm=(1.0,) * 7))
+    T = _targets(model, 1, seed=11)[0]
+    errs = [pulled.solve(CHAIN, T.translation, T.rotation, orientation_weight=w).orientation_error
+            for w in (0.01, 0.1, 1.0, 10.0)]
+    assert all(a > b for a, b in zip(errs, errs[1:])), errs
+    assert errs[0] > 5 * errs[-1]
+
+
+def test_rest_posture_keeps_the_waist_upright(model):
+    """When the arm alone can reach (targets made with the torso at 0), the rest-posture term
+    with iKin's weights (torso 1, arm 0) keeps the torso upright; without it the torso moves."""
+    with_rest = IkSolver(model, IkConfig(codegen=False, rest_joint_weights_arm=(0.0,) * 7))
+    no_rest = IkSolver(model, IkConfig(codegen=False, rest_weight=0.0))
+    worst_rest, worst_free = 0.0, 0.0
+    for T in _targets(model, 4, seed=5, torso=False):
+        a = with_rest.solve(CHAIN, T.translation, T.rotation)
+        b = no_rest.solve(CHAIN, T.translation, T.rotation)
+        assert a.success and b.success
+        worst_rest = max(worst_rest, float(np.abs(a.q[:3]).max()))
+        worst_free = max(worst_free, float(np.abs(b.q[:3]).max()))
+    assert math.degrees(worst_rest) < 1.0
+    assert math.degrees(worst_free) > 5.0
+
+
+def test_torso_used_when_the_arm_cannot_reach(solver):
+    """A point beyond the 7-DoF arm's reach: right_arm fails (and says so), torso_right_arm
+    reaches it by bending the waist."""
+    target = np.array([-0.35, 0.0, 0.25])
+    arm = solver.solve("right_arm", target)
+    assert not arm.success
+    assert arm.position_error > 5e-3
+    assert "not reached" in arm.message
+    full = solver.solve(CHAIN, target)
+    assert full.success, full.message
+    assert math.degrees(np.abs(full.q[:3]).max()) > 3.0
+
+
+def test_seven_dof_chain_holds_the_torso(model, solver):
+    """A 7-DoF solve keeps the torso at q_start's values and uses them in the kinematics."""
+    q_start = model.posture("rest")
+    q_start[model.indices(["torso_pitch", "torso_yaw"])] = [0.3, -0.2]
+    T = model.frame_pose(q_start, "r_hand_dh_frame")
+    target = T.translation + np.array([0.02, -0.03, 0.02])
+    sol = solver.solve("right_arm", target, None, q_start)
+    assert sol.success, sol.message
+    assert sol.joint_names[0] == "r_shoulder_pitch"
+    q = solver.full_q(sol, q_start)
+    np.testing.assert_allclose(q[model.indices(["torso_pitch", "torso_yaw"])], [0.3, -0.2])
+    assert np.linalg.norm(model.frame_position(q, "r_hand_dh_frame") - target) < 5.1e-4
+
+
+def test_shoulder_constraints_hold(model, solver):
+    """Solutions meet the 7 shoulder/forearm constraints, although the same targets solved
+    without them give violating solutions (so the constraints are active)."""
+    free = IkSolver(model, IkConfig(codegen=False, shoulder_constraints=False))
+    chain = KinematicChain.from_name(CHAIN)
+    alc = ArmLinearConstraints("right")
+    rng = np.random.default_rng(2)
+    violated = 0
+    for _ in range(6):
+        T = model.frame_pose(model.random_q(rng), chain.frame)
+        a = solver.solve(CHAIN, T.translation, T.rotation)
+        assert alc.violation(chain.joints, a.q) <= 1e-6
+        b = free.solve(CHAIN, T.translation, T.rotation)
+        violated += alc.violation(chain.joints, b.q) > 1e-3
+    assert violated >= 1
+
+
+def test_left_chains(model, solver):
+    """The left chains solve left-hand targets (frame l_hand_dh_frame)."""
+    T = _targets(model, 1, seed=3, hand="left")[0]
+    for chain in ("torso_left_arm", "left_arm"):
+        sol = solver.solve(chain, T.translation, None, model.posture("rest"))
+        if chain == "torso_left_arm":
+            assert sol.success, sol.message
+        assert sol.joint_names[-1] == "l_wrist_yaw"
+
+
+def test_warm_start_needs_fewer_iterations(model, solver):
+    """Starting from the previous solution converges in fewer iterations than from rest."""
+    T = _targets(model, 1, seed=8)[0]
+    cold = solver.solve(CHAIN, T.translation, T.rotation)
+    warm = solver.solve(CHAIN, T.translation, T.rotation, solver.full_q(cold))
+    assert warm.success
+    assert warm.iterations < cold.iterations
+
+
+def test_bad_requests_raise(solver):
+    """NaN targets, wrong shapes, non-rotations, bad weights and unknown chains raise
+    InvalidInput / UnknownName naming the problem."""
+    with pytest.raises(InvalidInput, match="position"):
+        solver.solve(CHAIN, [np.nan, 0.0, 0.0])
+    with pytest.raises(InvalidInput, match="position"):
+        solver.solve(CHAIN, [0.1, 0.2])
+    with pytest.raises(InvalidInput, match="rotation"):
+        solver.solve(CHAIN, [-0.3, 0.1, 0.0], np.ones((3, 3)))
+    with pytest.raises(InvalidInput, match="rotation"):
+        solver.solve(CHAIN, [-0.3, 0.1, 0.0], np.full((3, 3), np.nan))
+    with pytest.raises(InvalidInput, match="orientation_weight"):
+        solver.solve(CHAIN, [-0.3, 0.1, 0.0], orientation_weight=-1.0)
+    with pytest.raises(InvalidInput, match="epsilon"):
+        solver.solve(CHAIN, [-0.3, 0.1, 0.0], epsilon=0.0)
+    with pytest.raises(InvalidInput, match="q"):
+        solver.solve(CHAIN, [-0.3, 0.1, 0.0], None, np.zeros(3))
+    with pytest.raises(UnknownName, match="torso_left_arm"):
+        solver.solve("tail", [-0.3, 0.1, 0.0])
+
+
+def test_unreachable_target_reports_the_residual(solver):
+    """A target 2 m away: success False, the residual (> 1 m) and IPOPT's status reported."""
+    sol = solver.solve(CHAIN, [-2.0, 0.0, 0.0])
+    assert not sol.success
+    assert sol.position_error > 1.0
+    assert sol.status != "Solve_Succeeded"
+    assert "not reached" in sol.message
+
+
+def test_solve_time_is_bounded(model):
+    """With a tiny wall-time budget IPOPT stops early; the solver reports it, no exception."""
+    quick = IkSolver(model, IkConfig(codegen=False, max_solve_time=1e-4))
+    T = _targets(model, 1, seed=4)[0]
+    sol = quick.solve(CHAIN, T.translation, T.rotation)
+    assert sol.status == "Maximum_WallTime_Exceeded"
+    assert not sol.converged
+    assert np.all(np.isfinite(sol.q))
+
+
+def test_epsilon_is_a_squared_distance(model, solver):
+    """epsilon bounds the squared error: 1e-4 m^2 lets the position error reach 10 mm."""
+    T = _targets(model, 1, seed=12)[0]
+    loose = solver.solve(CHAIN, T.translation, T.rotation, epsilon=1e-4,
+                         orientation_weight=1.0)
+    assert loose.position_error <= 0.01 + 1e-6
+    tight = solver.solve(CHAIN, T.translation, T.rotation)
+    assert tight.position_error <= 5.1e-4
+
+
+def test_codegen_matches_the_casadi_vm(model, solver):
+    """The gcc-compiled NLP gives the same solution as CasADi's virtual machine."""
+    compiled = IkSolver(model, IkConfig(codegen=True))
+    assert compiled.problem(CHAIN).compiled
+    T = _targets(model, 1, seed=6)[0]
+    a = compiled.solve(CHAIN, T.translation, T.rotation)
+    b = solver.solve(CHAIN, T.translation, T.rotation)
+    np.testing.assert_allclose(a.q, b.q, atol=1e-6)
+
+
+def test_reconfigure_keeps_problems_unless_needed(model):
+    """Changing epsilon or weights keeps the built NLP; changing IPOPT settings rebuilds it."""
+    s = IkSolver(model, IkConfig(codegen=False))
+    p = s.problem("right_arm")
+    s.reconfigure(IkConfig(codegen=False, epsilon=1e-6, orientation_weight=2.0))
+    assert s.problem("right_arm") is p
+    s.reconfigure(IkConfig(codegen=False, epsilon=1e-6, max_iter=50))
+    assert s.problem("right_arm") is not p
+
+
+def test_dls_baseline(model):
+    """DLS reaches a reachable pose within its tolerances and fails (flagged) when the
+    target is out of reach."""
+    dls = DlsSolver(model)
+    T = _targets(model, 1, seed=9)[0]
+    sol = dls.solve(CHAIN, T.translation, T.rotation)
+    assert sol.success
+    assert sol.position_error <= dls.config.position_tolerance
+    assert sol.orientation_error <= dls.config.orientation_tolerance
+    far = dls.solve(CHAIN, [-2.0, 0.0, 0.0])
+    assert not far.success and far.position_error > 1.0
+
+
+def test_shipped_yaml_loads():
+    """config/cartesian_solver.yaml loads into IkConfig, MinJerkConfig and CartesianNodeConfig,
+    and holds no parameter none of them knows."""
+    from icub_pmp.config import load_params_file
+
+    path = config_dir() / "cartesian_solver.yaml"
+    params = load_params_file(path, "cartesian_solver")
+    known = set()
+    for cls in (IkConfig, MinJerkConfig, CartesianNodeConfig):
+        cfg = cls.from_yaml(path, "cartesian_solver")
+        known |= set(cls.field_names())
+        assert cfg == cls.from_dict({k: v for k, v in params.items() if k in cls.field_names()})
+    assert set(params) <= known, sorted(set(params) - known)
+    assert IkConfig.from_yaml(path, "cartesian_solver") == IkConfig()  # yaml == defaults
+
+
+@pytest.mark.parametrize(
+    "cls, bad",
+    [
+        (IkConfig, {"epsilon": -1.0}),
+        (IkConfig, {"rest_joint_weights_arm": [1.0, 2.0]}),
+        (IkConfig, {"max_iter": 0}),
+        (MinJerkConfig, {"trajectory_time": 0.05}),
+        (MinJerkConfig, {"period": 0.0}),
+        (CartesianNodeConfig, {"default_chain": "tail"}),
+        (IkConfig, {"epsilonn": 1e-6}),
+    ],
+)
+def test_bad_configs_rejected(cls, bad):
+    """Out-of-range or unknown parameters raise ConfigError."""
+    with pytest.raises(ConfigError):
+        cls.from_dict(bad)
