@@ -28,7 +28,7 @@ import numpy as np
 
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
-from icub_pmp.vision.synthetic_sequence import textured_image
+from icub_pmp.vision.synthetic_sequence import textured_image, triangle_wave
 
 __all__ = ["SequenceGenerator", "SequenceSpec", "SequenceFrame", "DIRECTIONS", "HEAD_AXES"]
 
@@ -109,16 +109,6 @@ class SequenceFrame:
     T_root_right: np.ndarray
     target_position: np.ndarray
     joints: dict
-
-
-def _triangle(t: float, speed: float, half_range: float, phase: float) -> float:
-    """Back-and-forth position in [-half_range, half_range] at constant |speed|."""
-    if speed == 0.0:
-        return 0.0
-    period = 4.0 * half_range / speed
-    ph = (t / period + phase) % 1.0
-    a = 4 * ph if ph < 0.25 else (2 - 4 * ph if ph < 0.75 else 4 * ph - 4)
-    return half_range * a
 
 
 class SequenceGenerator:
@@ -265,7 +255,7 @@ class SequenceGenerator:
         phase_t, phase_h = rng.uniform(0, 1, 2)
         t = k / self.fps
         q = self._base_q.copy()
-        head = math.radians(_triangle(t, spec.head_rate, spec.head_sweep, phase_h))
+        head = math.radians(triangle_wave(t, spec.head_rate, spec.head_sweep, phase_h))
         joint = "neck_yaw" if spec.head_axis == "yaw" else "neck_pitch"
         q[self._qadr[joint]] += head
         self.data.qpos[:] = q
@@ -274,7 +264,7 @@ class SequenceGenerator:
         else:
             # motion axes from the head at rest (the object moves in the world, not with it)
             axis = self._axes[spec.direction]
-            s = _triangle(t, spec.speed, spec.amplitude, phase_t)
+            s = triangle_wave(t, spec.speed, spec.amplitude, phase_t)
             pos = np.array(FIXATION) + s * axis
         self.data.mocap_pos[self._mocap] = pos
         self._mj.mj_forward(self.model, self.data)

@@ -17,7 +17,7 @@ import numpy as np
 
 from icub_pmp.errors import InvalidInput
 
-__all__ = ["SyntheticSequence", "SyntheticFrame", "textured_image"]
+__all__ = ["SyntheticSequence", "SyntheticFrame", "textured_image", "triangle_wave"]
 
 
 def textured_image(
@@ -35,6 +35,17 @@ def textured_image(
         acc += b / (b.std() + 1e-9)
     acc = (acc - acc.mean()) / (acc.std() + 1e-9)
     return np.clip(128.0 + 45.0 * acc, 0, 255).astype(np.uint8)
+
+
+def triangle_wave(t: float, speed: float, half_range: float, phase: float) -> float:
+    """Back-and-forth position in [-half_range, half_range] at constant ``speed`` (units of
+    half_range per second), starting at 0 for phase 0 (phase in periods)."""
+    if speed == 0.0:
+        return 0.0
+    period = 4.0 * half_range / speed
+    ph = (t / period + phase) % 1.0
+    a = 4 * ph if ph < 0.25 else (2 - 4 * ph if ph < 0.75 else 4 * ph - 4)
+    return half_range * a
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,12 +123,8 @@ class SyntheticSequence:
         """Camera yaw and pitch [rad] at time t: triangle wave of the given speeds."""
 
         def tri(rate: float) -> float:
-            if rate == 0.0:
-                return 0.0
-            period = 4.0 * self.sweep / abs(rate)
-            ph = (t / period) % 1.0
-            a = 4 * ph if ph < 0.25 else (2 - 4 * ph if ph < 0.75 else 4 * ph - 4)
-            return math.radians(self.sweep * a * math.copysign(1.0, rate))
+            a = triangle_wave(t, abs(rate), self.sweep, 0.0)
+            return math.radians(math.copysign(a, rate))
 
         return tri(self.yaw_rate), tri(self.pitch_rate)
 
