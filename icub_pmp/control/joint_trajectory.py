@@ -4,7 +4,8 @@ quintic Hermite polynomials (continuous position, velocity and acceleration).
 Given through points ``(t_k, q_k[, v_k, a_k, effort_k])``, each segment is the quintic that
 matches position, velocity and acceleration at both ends. Missing velocities are filled with
 a shape-preserving estimate (harmonic mean of the adjacent chord slopes, 0 at a local
-extremum and at the last point); missing accelerations are 0 at the knots. A single point
+extremum and at the last point); missing accelerations are central differences of the given
+velocities (0 at the ends), or 0 at the knots when velocities are missing too. A single point
 reached from rest is therefore the minimum-jerk profile. Efforts (used as torque feed-forward
 in the pure torque mode) are interpolated linearly. After the last point the trajectory holds it.
 """
@@ -159,8 +160,12 @@ class JointTrajectory:
         else:
             vel = _shape_preserving_velocities(times, pos)
             vel[0] = v0
-        acc = np.vstack([a0, self.accelerations if self.accelerations is not None
-                         else np.zeros_like(self.positions)])
+        if self.accelerations is not None:
+            acc = np.vstack([a0, self.accelerations])
+        else:
+            acc = _accelerations_from_velocities(times, vel) if self.velocities is not None \
+                else np.zeros_like(pos)
+            acc[0] = a0
         eff = None if self.efforts is None else np.vstack([self.efforts[0], self.efforts])
         return JointTrajectory(
             self.joint_names, times, pos, vel, acc, eff, start=start, limit_tolerance=np.inf
@@ -171,7 +176,12 @@ class JointTrajectory:
         p, t = self.positions, self.times
         vel = (self.velocities if self.velocities is not None
                else _shape_preserving_velocities(t, p))
-        acc = self.accelerations if self.accelerations is not None else np.zeros_like(p)
+        if self.accelerations is not None:
+            acc = self.accelerations
+        elif self.velocities is not None:
+            acc = _accelerations_from_velocities(t, vel)
+        else:
+            acc = np.zeros_like(p)
         self._vel, self._acc = vel, acc
         dt = np.diff(t)[:, None]
         p0, p1, v0, v1, a0, a1 = p[:-1], p[1:], vel[:-1], vel[1:], acc[:-1], acc[1:]
@@ -224,3 +234,13 @@ def _shape_preserving_velocities(times: np.ndarray, pos: np.ndarray) -> np.ndarr
     safe = np.where(same, left + right, 1.0)
     vel[1:-1] = np.where(same, 2.0 * left * right / safe, 0.0)
     return vel
+
+
+def _accelerations_from_velocities(times: np.ndarray, vel: np.ndarray) -> np.ndarray:
+    """Accelerations at the points from given velocities: central differences inside, 0 at
+    the first and last point (a dense sampled trajectory keeps its acceleration profile
+    instead of being forced through zero at every knot)."""
+    acc = np.zeros_like(vel)
+    if len(times) >= 3:
+        acc[1:-1] = (vel[2:] - vel[:-2]) / (times[2:] - times[:-2])[:, None]
+    return acc
