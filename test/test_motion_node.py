@@ -13,10 +13,10 @@ import time
 import numpy as np
 import pytest
 from geometry_msgs.msg import PointStamped
-from icub_interfaces.msg import MotionBlobs
-from sensor_msgs.msg import CameraInfo, Image
 from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import CameraInfo, Image
 
+from icub_interfaces.msg import MotionBlobs
 from icub_pmp.config import config_dir
 from icub_pmp.nodes.conversions import array_to_image, make_joint_state, sec_to_time
 from icub_pmp.testing import NodeProcess
