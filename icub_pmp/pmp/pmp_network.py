@@ -1,0 +1,318 @@
+"""PmpNetwork: one assembled PMP network (fields + branches + body model) for one task.
+
+It evaluates, at a state ``z`` (the network's joint angles, plus the held object's position
+when there is one), everything a relaxation step needs (Appendix A, eq A1):
+
+- the extrinsic forces ``F`` of every task row (eq 1: targets, orientation, obstacles, object
+  goal and grasp coupling of Sect. 3.2), stacked (m,);
+- the stacked Jacobian ``G`` (m, nz) of the task values w.r.t. ``z`` (hand rows from the body
+  model, eq 2/4; object rows from the device Jacobian ``J_D``);
+- the internal torques on ``z`` (eq 6 joint-limit field, the posture field of the posture
+  memory, the torque-limit field of Sect. 2.3) and their diagonal stiffness;
+- the admittance diagonal ``A`` (nz,) of the branching network (Sect. 2.5/3.1) and ``A_E``.
+
+The relaxation (:mod:`relaxation`) then integrates ``z' = A (G^T F + T_int)``.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, NamedTuple, Sequence
+
+import numpy as np
+
+from icub_pmp.errors import InvalidInput
+from icub_pmp.pmp.branching_network import BranchNetwork
+from icub_pmp.pmp.force_field import ForceField
+from icub_pmp.pmp.held_object import HeldObject
+from icub_pmp.pmp.jacobian_provider import JacobianProvider
+from icub_pmp.pmp.joint_limit_field import JointLimitField
+from icub_pmp.pmp.obstacle_field import ObstacleField
+from icub_pmp.pmp.orientation_field import OrientationField
+from icub_pmp.pmp.torque_limit_field import TorqueLimitField
+
+__all__ = ["PmpNetwork", "NetworkState", "PostureField"]
+
+
+class PostureField(NamedTuple):
+    """Intrinsic attractor toward a remembered posture, fading with relaxation time s:
+    ``T = k0 exp(-s / decay) (q_ref - q)`` (the DARWIN PMP's ``K_int (q_ref - q)`` field)."""
+
+    q_ref: np.ndarray  # (n,) [rad] over the network joints
+    gain: float  # k0 [N m/rad]
+    decay: float  # [relaxation time s]
+
+
+class NetworkState(NamedTuple):
+    """Everything one relaxation step needs at a state z."""
+
+    force: np.ndarray  # (m,) stacked extrinsic forces [N | N m]
+    jacobian: np.ndarray  # (m, nz)
+    torque: np.ndarray  # (nz,) internal torques
+    stiffness: np.ndarray  # (nz,) diagonal of -d torque / dz (>= 0)
+    hand_positions: np.ndarray  # (k, 3) [m]
+    hand_rotations: np.ndarray  # (k, 3, 3)
+    position_errors: np.ndarray  # (k,) [m] distance of each hand to its final target
+    rotation_errors: np.ndarray  # (k,) [rad] (0 for position-only hands)
+    clearance: float  # smallest hand clearance to an obstacle [m] (inf without obstacles)
+    torque_excess: float  # max |excess torque| / rating over the joints (0 without a limit field)
+
+
+class PmpNetwork:
+    """A PMP network for k hands on a body model.
+
+    Args:
+        provider: the body model (forward kinematics + Jacobians).
+        branches: joints and admittances (trunk + one branch per hand).
+        frames: hand -> end-effector frame of the body model.
+        q_start: full configuration (provider.nq,); joints outside the network stay there.
+        targets: hand -> position field (eq 1), for hands not coupled to ``held_object``.
+        orientations: hand -> orientation field (optional per hand).
+        obstacles: repulsive fields acting on every hand.
+        joint_limits: eq 6 field over the network joints (its limits bound z).
+        held_object: object coupled to its grasping hands (Sect. 3.2), or None.
+        posture: posture field (from the posture memory), or None.
+        torque_field: saturation field of Sect. 2.3, or None.
+    """
+
+    def __init__(
+        self,
+        provider: JacobianProvider,
+        branches: BranchNetwork,
+        frames: Mapping[str, str],
+        q_start: np.ndarray,
+        targets: Mapping[str, ForceField],
+        orientations: Mapping[str, OrientationField] | None = None,
+        obstacles: Sequence[ObstacleField] = (),
+        joint_limits: JointLimitField | None = None,
+        held_object: HeldObject | None = None,
+        posture: PostureField | None = None,
+        torque_field: TorqueLimitField | None = None,
+    ):
+        self.provider = provider
+        self.branches = branches
+        self.hands: tuple[str, ...] = tuple(branches.branches)
+        missing = [h for h in self.hands if h not in frames]
+        if missing:
+            raise InvalidInput(f"no end-effector frame for hand(s) {missing}")
+        self.frames = tuple(frames[h] for h in self.hands)
+        self._q_start = np.array(q_start, dtype=float)
+        if self._q_start.shape != (provider.nq,):
+            raise InvalidInput(f"q_start: expected ({provider.nq},), got {self._q_start.shape}")
+        self.joint_index = np.array(
+            [provider.joint_names.index(j) for j in branches.joint_names], dtype=int
+        )
+        self.n = branches.n
+        self.orientations = dict(orientations or {})
+        self.obstacles = tuple(obstacles)
+        self.held_object = held_object
+        self.posture = posture
+        self.torque_field = torque_field
+        coupled = set(held_object.hands) if held_object else set()
+        for h in coupled:
+            if h not in self.hands:
+                raise InvalidInput(f"held object: grasping hand {h!r} is not in the network")
+        for h in self.hands:
+            if h not in coupled and h not in targets:
+                raise InvalidInput(f"no target field for hand {h!r}")
+        self.targets = {h: targets[h] for h in self.hands if h not in coupled}
+        if joint_limits is None:
+            idx = self.joint_index
+            joint_limits = JointLimitField(provider.lower[idx], provider.upper[idx], 0.0)
+        if joint_limits.lower.shape != (self.n,):
+            raise InvalidInput(f"joint limits: expected {self.n} joints")
+        self.joint_limits = joint_limits
+        self.nz = self.n + (3 if held_object else 0)
+        a = [branches.admittance] + ([np.full(3, held_object.admittance)] if held_object else [])
+        #: admittance diagonal (nz,)
+        self.admittance = np.concatenate(a)
+        self._build_rows(coupled)
+
+    # ------------------------------------------------------------------ layout
+    def _build_rows(self, coupled: set[str]) -> None:
+        """Row layout of the stacked task space and its constant field stiffness K (m, m)."""
+        rows: list[tuple[str, str, int]] = []  # (kind, hand, first row)
+        blocks: list[np.ndarray] = []
+        r = 0
+        for h in self.hands:
+            if h in coupled:
+                rows.append(("grasp", h, r))
+                blocks.append(np.eye(3) * self.held_object.grasp_stiffness)
+            else:
+                rows.append(("position", h, r))
+                blocks.append(self.targets[h].jacobian)
+            r += 3
+            if h in self.orientations:
+                rows.append(("orientation", h, r))
+                blocks.append(np.eye(3) * self.orientations[h].stiffness)
+                r += 3
+        if self.held_object is not None:
+            rows.append(("object", "", r))
+            blocks.append(np.eye(3) * self.held_object.goal_stiffness)
+            r += 3
+        self.m = r
+        self._rows = rows
+        k = np.zeros((r, r))
+        for (_, _, r0), b in zip(rows, blocks):
+            k[r0:r0 + 3, r0:r0 + 3] = b
+        self._base_stiffness = k
+        self._row_gain = np.ones(r)
+        #: -dF/dy of the attractive fields (m, m); obstacles are applied explicitly
+        self.field_stiffness = k.copy()
+        self.field_stiffness.setflags(write=False)
+        self._final_targets = np.array([self.final_target(h) for h in self.hands])
+        self._fast = self.held_object is None and not self.orientations
+        if self._fast:  # position-only hands: F = K (y_T - y) in one product
+            self._y_target = self._final_targets.reshape(-1)
+        self._zero_rot = np.zeros(len(self.hands))
+        self._zero_rot.setflags(write=False)
+
+    def hand_rows(self, hand: str) -> np.ndarray:
+        """Task rows (position, orientation, grasp) belonging to ``hand``."""
+        return np.concatenate(
+            [np.arange(r0, r0 + 3) for kind, h, r0 in self._rows if h == hand]
+        )
+
+    def balance_hands(self, state: NetworkState) -> np.ndarray:
+        """Scale each hand's field stiffness so all hands start relaxing at the same rate.
+
+        The rate of hand i (Appendix A's gamma, eq A2) is ``|G_i^T F_i|^2_A / F_i^T K_i^-1
+        F_i``; hands whose arm is less mobile along their target direction get a
+        proportionally stiffer field (an anisotropy between the branches' K_ext, eq 1), so
+        under one TBG they progress alike. Returns the gains (k,) (1 = unchanged).
+        """
+        rates = np.zeros(len(self.hands))
+        for i, h in enumerate(self.hands):
+            rows = self.hand_rows(h)
+            f = state.force[rows]
+            gf = state.jacobian[rows].T @ f
+            kinv_f = np.linalg.lstsq(self._base_stiffness[np.ix_(rows, rows)], f, rcond=None)[0]
+            den = float(f @ kinv_f)
+            num = float(gf @ (self.admittance * gf))
+            rates[i] = num / den if den > 0 and num > 0 else 0.0
+        gains = np.ones(len(self.hands))
+        live = rates > 0
+        if live.sum() >= 2:
+            mean = float(np.exp(np.mean(np.log(rates[live]))))
+            gains[live] = mean / rates[live]
+        row_gain = np.ones(self.m)
+        for i, h in enumerate(self.hands):
+            row_gain[self.hand_rows(h)] = gains[i]
+        self._row_gain = row_gain
+        k = row_gain[:, None] * self._base_stiffness
+        k.setflags(write=False)
+        self.field_stiffness = k
+        return gains
+
+    def final_target(self, hand: str) -> np.ndarray:
+        """Where ``hand`` must be at equilibrium (3,) [m]."""
+        if self.held_object is not None and hand in self.held_object.grasp_offsets:
+            return self.held_object.hand_targets()[hand]
+        return self.targets[hand].target
+
+    # ------------------------------------------------------------------ state
+    @property
+    def lower(self) -> np.ndarray:
+        """Joint lower limits of the network joints (n,) [rad]."""
+        return self.joint_limits.lower
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Joint upper limits of the network joints (n,) [rad]."""
+        return self.joint_limits.upper
+
+    def initial_state(self) -> np.ndarray:
+        """z at the start: network joints of q_start (+ the object's start position)."""
+        z = self._q_start[self.joint_index]
+        if self.held_object is not None:
+            z = np.concatenate([z, self.held_object.position])
+        return z
+
+    def q_full(self, z: np.ndarray) -> np.ndarray:
+        """The full configuration (provider.nq,) with the network joints taken from z."""
+        q = self._q_start.copy()
+        q[self.joint_index] = z[: self.n]
+        return q
+
+    def hand_positions(self, z: np.ndarray) -> np.ndarray:
+        """Hand positions (k, 3) [m] at z (forward kinematics only)."""
+        return self.provider.positions(self.q_full(z), self.frames)
+
+    # ------------------------------------------------------------------ evaluation
+    def evaluate(self, z: np.ndarray, s: float = 0.0) -> NetworkState:
+        """Fields, Jacobian and internal torques at state z and relaxation time s."""
+        q = self._q_start.copy()
+        q[self.joint_index] = z[: self.n]
+        kin = self.provider.kinematics(q, self.frames)
+        pos, rot = kin.positions, kin.rotations
+        k = len(self.hands)
+        if self._fast:
+            g = kin.jacobians[:, :3, self.joint_index].reshape(3 * k, self.n)
+            force = self.field_stiffness @ (self._y_target - pos.reshape(-1))
+            rot_err = self._zero_rot
+        else:
+            jac = kin.jacobians[:, :, self.joint_index]  # (k, 6, n)
+            g = np.zeros((self.m, self.nz))
+            force = np.empty(self.m)
+            rot_err = np.zeros(k)
+            obj = z[self.n:] if self.held_object is not None else None
+            for kind, hand, r0 in self._rows:
+                i = self.hands.index(hand) if hand else -1
+                if kind == "position":
+                    g[r0:r0 + 3, : self.n] = jac[i, :3]
+                    force[r0:r0 + 3] = self.targets[hand].force(pos[i])
+                elif kind == "orientation":
+                    g[r0:r0 + 3, : self.n] = jac[i, 3:]
+                    err = self.orientations[hand].error(rot[i])
+                    rot_err[i] = float(np.linalg.norm(err))
+                    force[r0:r0 + 3] = self.orientations[hand].stiffness * err
+                elif kind == "grasp":  # task value y = x_i - x_o, target r_i
+                    g[r0:r0 + 3, : self.n] = jac[i, :3]
+                    g[r0:r0 + 3, self.n:] = -np.eye(3)
+                    r_i = self.held_object.grasp_offsets[hand]
+                    force[r0:r0 + 3] = self.held_object.grasp_stiffness * (
+                        r_i - (pos[i] - obj)
+                    )
+                else:  # object goal: task value y = x_o
+                    g[r0:r0 + 3, self.n:] = np.eye(3)
+                    force[r0:r0 + 3] = self.held_object.goal_stiffness * (
+                        self.held_object.goal - obj
+                    )
+            force = force * self._row_gain
+        clearance = np.inf
+        if self.obstacles:
+            force = force.copy()
+            for i in range(k):
+                r0 = self._position_row(i)
+                for ob in self.obstacles:
+                    force[r0:r0 + 3] += ob.force(pos[i])
+                    clearance = min(clearance, float(ob.clearance(pos[i])))
+        torque, stiff, excess = self._internal(z, q, s)
+        d = self._final_targets - pos
+        pos_err = np.sqrt((d * d).sum(axis=1))
+        return NetworkState(
+            force, g, torque, stiff, pos, rot, pos_err, rot_err, clearance, excess
+        )
+
+    def _position_row(self, i: int) -> int:
+        hand = self.hands[i]
+        return next(r0 for kind, h, r0 in self._rows if h == hand and kind != "orientation")
+
+    def _internal(
+        self, z: np.ndarray, q: np.ndarray, s: float
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """Internal torques (nz,), their diagonal stiffness (nz,), normalised torque excess."""
+        qn = z[: self.n]
+        t, d = self.joint_limits.torques_and_stiffness(qn)
+        if self.posture is not None:
+            w = self.posture.gain * np.exp(-s / self.posture.decay)
+            t = t + w * (self.posture.q_ref - qn)
+            d = d + w
+        excess = 0.0
+        if self.torque_field is not None:
+            ts, ds, excess = self.torque_field.torques_and_stiffness(q)
+            t = t + ts
+            d = d + ds
+        if self.nz > self.n:
+            t = np.concatenate([t, np.zeros(self.nz - self.n)])
+            d = np.concatenate([d, np.zeros(self.nz - self.n)])
+        return t, d, excess

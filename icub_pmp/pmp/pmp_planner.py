@@ -1,0 +1,362 @@
+"""PmpPlanner: the planner facade. A ReachGoal and a start posture in, a ReachPlan out.
+
+It assembles the PMP network of the task (Fig 5 for the arms and trunk, Fig 8 with a held
+object, the fields of eqs 1 and 6, obstacles, Sect. 2.3's saturation), relaxes it to
+equilibrium in the TBG's relaxation time (:mod:`relaxation`), and puts the result on the TBG's
+clock (:mod:`tbg_timing`). Planning never executes anything: it is the mental simulation of
+Sect. 4, whose residuals say whether (and by how much) the goal is out of reach.
+
+Steps of :meth:`PmpPlanner.plan`:
+
+1. relax from the start posture;
+2. if the hands stay further from the targets than the success tolerance, recall from the
+   posture memory the babbled posture whose hands came nearest, relax again from the start
+   with a fading field toward it and keep the better of the two (:mod:`posture_memory`);
+3. with target forces, continue the relaxation with the torque-limit field of Sect. 2.3
+   (null-space settling);
+4. sample the path at the TBG's times, compute the predicted hand paths and the residuals.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Mapping
+
+import numpy as np
+
+from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
+from icub_pmp.pmp.branching_network import BranchNetwork
+from icub_pmp.pmp.force_field import ForceField
+from icub_pmp.pmp.jacobian_provider import JacobianProvider
+from icub_pmp.pmp.joint_limit_field import JointLimitField
+from icub_pmp.pmp.orientation_field import OrientationField
+from icub_pmp.pmp.pmp_config import PmpConfig
+from icub_pmp.pmp.pmp_network import PmpNetwork, PostureField
+from icub_pmp.pmp.posture_memory import PostureMemory
+from icub_pmp.pmp.reach_goal import ReachGoal
+from icub_pmp.pmp.reach_plan import ReachPlan
+from icub_pmp.pmp.relaxation import Relaxation, RelaxationSettings, RelaxationTrace
+from icub_pmp.pmp.tbg_timing import TbgTiming
+from icub_pmp.pmp.time_base_generator import TimeBaseGenerator
+from icub_pmp.pmp.torque_limit_field import TorqueLimitField
+
+__all__ = ["PmpPlanner"]
+
+
+class PmpPlanner:
+    """Plans reaches with PMP networks on a body model.
+
+    Args:
+        config: gains, timing and tolerances (default: :class:`PmpConfig` defaults).
+        provider: body model; default the iCub URDF through pinocchio.
+        spec: robot facts (joint sets, hand frames, torque ratings); default robot.yaml.
+    """
+
+    def __init__(
+        self,
+        config: PmpConfig | None = None,
+        provider: JacobianProvider | None = None,
+        spec: RobotSpec | None = None,
+    ):
+        self.config = config or PmpConfig()
+        self.spec = spec or RobotSpec.load()
+        if provider is None:
+            from icub_pmp.pmp.pinocchio_provider import PinocchioJacobianProvider
+
+            provider = PinocchioJacobianProvider()
+        self.provider = provider
+        self._names = provider.joint_names
+        for j in self.spec.torso_joints + self.spec.left_arm_joints + self.spec.right_arm_joints:
+            if j not in self._names:
+                raise UnknownName("joint of the body model", j, self._names)
+        self._range = provider.upper - provider.lower
+        self._ref_range = float(np.mean(self._range))
+        self._memories: dict[tuple, PostureMemory] = {}
+        self._relax = Relaxation(self._settings(self.config.max_steps))
+        self._settle = Relaxation(self._settings(self.config.settle_max_steps, normalise=False))
+
+    def _settings(self, max_steps: int, normalise: bool = True) -> RelaxationSettings:
+        c = self.config
+        return RelaxationSettings(
+            initial_step=c.initial_step, step_growth=c.step_growth, max_step=c.max_step,
+            max_steps=max_steps, stall_steps=c.stall_steps, tolerance=c.convergence_tolerance,
+            rotation_tolerance=c.rotation_tolerance, boundary_fraction=c.boundary_fraction,
+            normalise_rate=normalise, balance_hands=normalise and c.balance_hands,
+        )
+
+    # ------------------------------------------------------------------ inputs
+    def start_configuration(self, q_start: np.ndarray | Mapping[str, float] | None) -> np.ndarray:
+        """Full configuration (nq,) from an array, a {joint: angle} dict (missing joints at the
+        rest posture) or None (the rest posture)."""
+        rest = self.spec.posture("rest")
+        base = np.array([rest.get(n, 0.0) for n in self._names])
+        if q_start is None:
+            return base
+        if isinstance(q_start, Mapping):
+            for n, v in q_start.items():
+                if n in self._names:
+                    base[self._names.index(n)] = float(v)
+            q = base
+        else:
+            q = np.array(q_start, dtype=float).reshape(-1)
+            if q.shape != (len(self._names),):
+                raise InvalidInput(f"start: expected {len(self._names)} joint angles, got {q.size}")
+        if not np.all(np.isfinite(q)):
+            raise InvalidInput("start: contains NaN or infinite joint angles")
+        return q
+
+    def build_network(
+        self, goal: ReachGoal, q_start: np.ndarray, posture: PostureField | None = None
+    ) -> PmpNetwork:
+        """The PMP network of ``goal`` on the body model (validates the goal)."""
+        c = self.config
+        for h in goal.hands:
+            if h not in HANDS:
+                raise UnknownName("hand", h, HANDS)
+        for j in tuple(goal.frozen_joints) + tuple(goal.joint_limits):
+            if j not in self._names:
+                raise UnknownName("joint", j, self._names)
+        trunk = self.spec.torso_joints if goal.use_torso else ()
+        arms = {h: self.spec.arm_joints(h) for h in goal.hands}
+        trunk_a = np.array(c.trunk_admittance) * goal.trunk_admittance_scale
+        arm_a = {h: np.array(c.arm_admittance) for h in goal.hands}
+        if c.range_normalised_admittance:  # eq 6's normalised joint angles, equal admittance
+            trunk_a = trunk_a * self._range_factor(trunk)
+            arm_a = {h: a * self._range_factor(arms[h]) for h, a in arm_a.items()}
+        branches = BranchNetwork(trunk, arms, trunk_a, arm_a)
+        frozen = set(goal.frozen_joints)
+        if frozen:
+            a = branches.admittance.copy()
+            for i, j in enumerate(branches.joint_names):
+                if j in frozen:
+                    a[i] = 0.0
+            nt = len(trunk)
+            branches = branches.with_admittance(
+                a[:nt], {h: a[branches.branch_slices[h]] for h in goal.hands}
+            )
+        idx = [self._names.index(j) for j in branches.joint_names]
+        lower = self.provider.lower[idx].copy()
+        upper = self.provider.upper[idx].copy()
+        for j, (lo, hi) in goal.joint_limits.items():
+            if j in branches.joint_names:
+                k = branches.joint_names.index(j)
+                lower[k], upper[k] = lo, hi
+        qs = q_start[idx]
+        tol = c.start_tolerance
+        outside = (qs < lower - tol) | (qs > upper + tol)
+        if np.any(outside):
+            bad = [f"{branches.joint_names[i]}={qs[i]:.3f} not in [{lower[i]:.3f}, {upper[i]:.3f}]"
+                   for i in np.flatnonzero(outside)]
+            raise InvalidInput(f"start posture outside the joint limits: {', '.join(bad)}")
+        limits = JointLimitField(lower, upper, c.joint_limit_alpha)
+        targets = {
+            h: ForceField(p, np.array(c.stiffness), c.curl, c.curl_axis)
+            for h, p in goal.targets.items()
+        }
+        orientations = {
+            h: OrientationField(r, c.rotation_stiffness) for h, r in goal.orientations.items()
+        }
+        return PmpNetwork(
+            self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
+            targets, orientations, goal.obstacles, limits, goal.held_object, posture,
+        )
+
+    def _range_factor(self, joints) -> np.ndarray:
+        idx = [self._names.index(j) for j in joints]
+        return (self._range[idx] / self._ref_range) ** 2
+
+    # ------------------------------------------------------------------ planning
+    def plan(
+        self, goal: ReachGoal, q_start: np.ndarray | Mapping[str, float] | None = None
+    ) -> ReachPlan:
+        """Plan ``goal`` from ``q_start`` (see :meth:`start_configuration`)."""
+        t0 = time.perf_counter()
+        c = self.config
+        q0 = self.start_configuration(q_start)
+        net = self.build_network(goal, q0)
+        trace = self._relax.run(net)
+        attempts, used_memory = 1, False
+        if not self._reached(trace) and c.posture_memory_size > 0:
+            recall = self._memory(net).recall(
+                np.array([net.final_target(h) for h in net.hands])
+            )
+            field = PostureField(recall.q, c.posture_field_gain, c.posture_field_decay)
+            trace2 = self._relax.run(self.build_network(goal, q0, posture=field))
+            attempts = 2
+            if self._score(trace2) < self._score(trace):
+                trace, used_memory = trace2, True
+        null_space = np.zeros(trace.steps, dtype=bool)
+        torque_field = None
+        if goal.target_forces:
+            trace, null_space, torque_field = self._settle_torques(goal, net, trace)
+        return self._make_plan(goal, net, trace, null_space, torque_field, attempts,
+                               used_memory, t0)
+
+    def _reached(self, trace: RelaxationTrace) -> bool:
+        c = self.config
+        return bool(
+            np.all(trace.position_errors[-1] <= c.success_tolerance)
+            and np.all(trace.rotation_errors[-1] <= c.rotation_success_tolerance)
+        )
+
+    def _score(self, trace: RelaxationTrace) -> float:
+        return float(np.max(trace.position_errors[-1], initial=0.0)
+                     + 0.1 * np.max(trace.rotation_errors[-1], initial=0.0))
+
+    def _memory(self, net: PmpNetwork) -> PostureMemory:
+        """The posture memory of this network's joints (built once, then cached)."""
+        fixed = sorted(
+            {j for f in net.frames for j in self.provider.ancestors(f)}
+            - set(net.branches.joint_names)
+        )
+        q = net.q_full(net.initial_state())
+        key = (
+            net.branches.joint_names, net.frames,
+            tuple(np.round(net.lower, 6)), tuple(np.round(net.upper, 6)),
+            tuple(round(float(q[self._names.index(j)]), 4) for j in fixed),
+        )
+        mem = self._memories.get(key)
+        if mem is None:
+            if len(self._memories) >= 16:
+                self._memories.pop(next(iter(self._memories)))
+            mem = self._memories[key] = PostureMemory(
+                self.provider, net.joint_index, net.frames, q, net.lower, net.upper,
+                self.config.posture_memory_size, self.config.posture_memory_seed,
+            )
+        return mem
+
+    def warm_up(self, hands=HANDS, use_torso: bool = True, q_start=None) -> None:
+        """Build the posture memory of a network ahead of the first plan that needs it."""
+        if self.config.posture_memory_size <= 0:
+            return
+        q0 = self.start_configuration(q_start)
+        goal = ReachGoal(targets={h: np.zeros(3) for h in hands}, use_torso=use_torso)
+        self._memory(self.build_network(goal, q0))
+
+    def _settle_torques(self, goal: ReachGoal, net: PmpNetwork, trace: RelaxationTrace):
+        """Sect. 2.3: from the equilibrium, relax with the saturation field (null space)."""
+        c = self.config
+        hands = tuple(h for h in net.hands if h in goal.target_forces)
+        limits = np.array([self.spec.torque_limit(j) for j in self._names])
+        field = TorqueLimitField(
+            self.provider, [self.spec.hand_frame(h) for h in hands],
+            np.array([goal.target_forces[h] for h in hands]), limits, net.joint_index,
+            gravity=c.torque_gravity, margin=c.torque_limit_margin,
+        )
+        net2 = PmpNetwork(
+            self.provider, net.branches, dict(zip(net.hands, net.frames)), net.q_full(
+                trace.z[-1]), net.targets, net.orientations, net.obstacles, net.joint_limits,
+            net.held_object, None, field,
+        )
+        scale = trace.rate_scale
+        net2.admittance = net2.admittance * scale  # same time scale as the reach
+        settle = self._settle.run(net2, trace.z[-1])
+        s_off = trace.s[-1]
+        merged = RelaxationTrace(
+            s=np.concatenate([trace.s, s_off + settle.s[1:]]),
+            z=np.concatenate([trace.z, settle.z[1:]]),
+            hand_positions=np.concatenate([trace.hand_positions, settle.hand_positions[1:]]),
+            hand_rotations=np.concatenate([trace.hand_rotations, settle.hand_rotations[1:]]),
+            position_errors=np.concatenate([trace.position_errors, settle.position_errors[1:]]),
+            rotation_errors=np.concatenate([trace.rotation_errors, settle.rotation_errors[1:]]),
+            converged=trace.converged and settle.converged,
+            stop_reason=settle.stop_reason,
+            rate_scale=scale,
+        )
+        null_space = np.r_[np.zeros(trace.steps, dtype=bool), np.ones(settle.steps, dtype=bool)]
+        return merged, null_space, field
+
+    # ------------------------------------------------------------------ result
+    def _make_plan(self, goal, net, trace, null_space, torque_field, attempts, used_memory, t0):
+        c = self.config
+        tau = goal.tau if goal.tau is not None else c.tau
+        tbg = TimeBaseGenerator(tau)
+        timing = TbgTiming(tbg, c.time_parametrisation, c.rotation_length_scale)
+        z_nodes, s_nodes = trace.z, trace.s
+        pos_nodes, rot_nodes = trace.hand_positions, trace.hand_rotations
+        if len(s_nodes) < 2:  # already at the target: a still trajectory
+            z_nodes = np.repeat(z_nodes, 2, axis=0)
+            s_nodes = np.array([0.0, 1.0])
+            pos_nodes = np.repeat(pos_nodes, 2, axis=0)
+            rot_nodes = np.repeat(rot_nodes, 2, axis=0)
+            null_space = np.zeros(1, dtype=bool)
+        progress = timing.progress(
+            pos_nodes, rot_nodes, z_nodes[:, : net.n], null_space, bool(goal.orientations)
+        )
+        times = tbg.sample_times(c.sample_period)
+        k, phi = timing.locate(times, s_nodes, progress)
+        z = timing.interpolate(z_nodes, k, phi)
+        z[-1] = z_nodes[-1]
+        joints = z[:, : net.n]
+        vel = np.gradient(joints, times, axis=0)
+        vel[0] = 0.0
+        vel[-1] = 0.0
+        q_full = np.repeat(net.q_full(z_nodes[0])[None, :], len(times), axis=0)
+        q_full[:, net.joint_index] = joints
+        q_final = q_full[-1].copy()
+        final = self.provider.kinematics(q_final, net.frames)
+        residuals, rot_res = {}, {}
+        for i, h in enumerate(net.hands):
+            residuals[h] = float(np.linalg.norm(final.positions[i] - net.final_target(h)))
+            rot_res[h] = (
+                float(np.linalg.norm(net.orientations[h].error(final.rotations[i])))
+                if h in net.orientations else 0.0
+            )
+        ok = all(r <= c.success_tolerance for r in residuals.values()) and all(
+            r <= c.rotation_success_tolerance for r in rot_res.values()
+        )
+        torque_ratio = None
+        if torque_field is not None:
+            torque_ratio = torque_field.violation(q_final)
+            ok = ok and torque_ratio <= 1.0
+        message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory)
+        plan = ReachPlan(
+            hands=net.hands,
+            joint_names=net.branches.joint_names,
+            t=times,
+            positions=joints,
+            velocities=vel,
+            residuals=residuals,
+            rotation_residuals=rot_res,
+            success=ok,
+            message=message + f" ({(time.perf_counter() - t0) * 1e3:.1f} ms)",
+            tau=tau,
+            q_start=q_full[0].copy(),
+            q_final=q_final,
+            trace=trace,
+            object_path=z[:, net.n:].copy() if net.held_object is not None else None,
+            torque_ratio=torque_ratio,
+            attempts=attempts,
+            used_memory=used_memory,
+            path_function=lambda: self._hand_paths(net.hands, net.frames, q_full),
+        )
+        return plan
+
+    def _hand_paths(self, hands, frames, q_full: np.ndarray) -> dict[str, np.ndarray]:
+        paths = np.array([self.provider.positions(q, frames) for q in q_full])
+        return {h: paths[:, i, :].copy() for i, h in enumerate(hands)}
+
+    def _message(self, hands, residuals, rot_res, ok, torque_ratio, used_memory) -> str:
+        c = self.config
+        parts = [f"{h} {residuals[h] * 1e3:.2f} mm" for h in hands]
+        text = "residuals " + ", ".join(parts)
+        if any(rot_res.values()):
+            text += "; orientation " + ", ".join(f"{h} {rot_res[h]:.4f} rad" for h in hands)
+        if ok:
+            head = "reached"
+        else:
+            short = [h for h in hands if residuals[h] > c.success_tolerance]
+            if short:
+                worst = max(short, key=lambda h: residuals[h])
+                head = (f"out of reach: {worst} hand ends {residuals[worst] * 1e3:.1f} mm from "
+                        f"its target (a tool that long would be needed)")
+            elif torque_ratio is not None and torque_ratio > 1.0:
+                head = f"torque limits exceeded by a factor {torque_ratio:.2f} after settling"
+            else:
+                head = "orientation not reached"
+        if torque_ratio is not None:
+            text += f"; max torque/limit {torque_ratio:.2f}"
+        if used_memory:
+            text += "; via posture memory"
+        return f"{head}: {text}"
