@@ -279,3 +279,31 @@ def test_bad_configs_rejected(cls, bad):
     """Out-of-range or unknown parameters raise ConfigError."""
     with pytest.raises(ConfigError):
         cls.from_dict(bad)
+
+
+def test_additional_nonlinear_constraint(model):
+    """An extra nonlinear constraint (hand x axis pointing down: R[2, 0] <= -0.9, a 'palm
+    orientation' limit) holds at the solution of a position-only request, whereas the solution
+    without it violates it; a malformed constraint is rejected."""
+    import casadi as ca
+
+    from icub_pmp.cartesian import NlpConstraint
+
+    def x_axis_down(q_fk, kin):
+        _, R = kin.function(q_fk)
+        return R[2, 0]
+
+    target = np.array([-0.25, 0.20, 0.05])
+    plain = IkSolver(model, IkConfig(codegen=False)).solve(CHAIN, target)
+    assert plain.success and plain.rotation[2, 0] > -0.9
+    c = NlpConstraint("x_axis_down", x_axis_down, [-np.inf], [-0.9])
+    solver = IkSolver(model, IkConfig(codegen=False), constraints={CHAIN: [c]})
+    sol = solver.solve(CHAIN, target)
+    assert sol.success, sol.message
+    assert sol.rotation[2, 0] <= -0.9 + 1e-6
+    assert sol.constraint_violation <= 1e-6
+    bad = NlpConstraint("two_rows", lambda q, k: ca.vertcat(q[0], q[1]), [0.0], [1.0])
+    with pytest.raises(InvalidInput, match="two_rows"):
+        IkSolver(model, IkConfig(codegen=False), constraints={CHAIN: [bad]}).problem(CHAIN)
+    with pytest.raises(UnknownName):
+        IkSolver(model, constraints={"tail": [c]})

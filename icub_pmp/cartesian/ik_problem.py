@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import os
+from typing import Callable, NamedTuple, Sequence
 
 # IPOPT's linear solver (MUMPS) is built with OpenMP; on a 10-variable problem its thread pool
 # costs more than it gives (about 20 % per solve measured here). Must be set before the IPOPT
@@ -31,12 +32,29 @@ from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
 from icub_pmp.cartesian.ik_config import IkConfig
 from icub_pmp.cartesian.kinematic_chain import KinematicChain
 from icub_pmp.cartesian.nlp_codegen import compiled_nlpsol
+from icub_pmp.errors import InvalidInput
 from icub_pmp.kinematics.robot_model import IcubModel
 
-__all__ = ["IkProblem", "POSITION_SCALE"]
+__all__ = ["IkProblem", "NlpConstraint", "POSITION_SCALE"]
 
 _LOG = logging.getLogger(__name__)
 POSITION_SCALE = 1e4  # m^2 -> cm^2 for the position constraint inside the NLP
+
+
+class NlpConstraint(NamedTuple):
+    """An additional constraint ``lb <= expression(q_fk, kinematics) <= ub`` (item 5 of Sect. 4:
+    "it is easy to add new constraints as linear and/or nonlinear inequalities").
+
+    ``expression`` receives the SX vector of the chain's ``fk_joints`` (torso first, 10) [rad]
+    and the chain's :class:`CasadiKinematics` (``kinematics.function(q_fk)`` gives the hand
+    position and rotation) and returns an SX column of the same length as ``lb`` and ``ub``
+    (use +-inf for a one-sided bound).
+    """
+
+    name: str
+    expression: Callable[[ca.SX, CasadiKinematics], ca.SX]
+    lb: Sequence[float]
+    ub: Sequence[float]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,7 +84,13 @@ class IkProblem:
         compiled: whether the NLP functions run as compiled C.
     """
 
-    def __init__(self, model: IcubModel, chain: KinematicChain, config: IkConfig):
+    def __init__(
+        self,
+        model: IcubModel,
+        chain: KinematicChain,
+        config: IkConfig,
+        constraints: Sequence[NlpConstraint] = (),
+    ):
         self.chain = chain
         self.config = config
         self.kinematics = CasadiKinematics(model, chain.frame, chain.fk_joints)
@@ -99,7 +123,25 @@ class IkProblem:
         g = [POSITION_SCALE * self.position_error_sq]
         if self.linear is not None:
             g.append(ca.DM(self.linear.C) @ self.q)
+        self.constraints = tuple(constraints)
+        extra, self._extra_lb, self._extra_ub = [], [], []
+        for c in self.constraints:
+            expr = ca.vec(c.expression(q_fk, self.kinematics))
+            lb = np.asarray(c.lb, dtype=float).reshape(-1)
+            ub = np.asarray(c.ub, dtype=float).reshape(-1)
+            if not (expr.numel() == lb.size == ub.size) or np.any(lb > ub):
+                raise InvalidInput(
+                    f"constraint {c.name!r}: expression has {expr.numel()} rows, "
+                    f"lb {lb.size}, ub {ub.size} (and lb <= ub is required)"
+                )
+            extra.append(expr)
+            self._extra_lb += list(lb)
+            self._extra_ub += list(ub)
+        g += extra
         self.g = ca.vertcat(*g)
+        self._extra_fn = None
+        if extra:
+            self._extra_fn = ca.Function("extra", [self.q, self.p], [ca.vertcat(*extra)])
         opts = {
             "ipopt.print_level": 0,
             "ipopt.sb": "yes",
@@ -115,6 +157,7 @@ class IkProblem:
         }
         nlp = {"x": self.q, "p": self.p, "f": self.f, "g": self.g}
         name = f"ik_{chain.name}{'_lin' if self.linear is not None else ''}"
+        name += "".join(f"_{c.name}" for c in self.constraints if c.name.isidentifier())
         if config.codegen:
             self.solver, self.compiled = compiled_nlpsol(name, nlp, opts)
         else:
@@ -147,12 +190,17 @@ class IkProblem:
         if self.linear is not None:
             lbg += list(self.linear.lb)
             ubg += list(self.linear.ub)
-        return np.array(lbg), np.array(ubg)
+        return np.array(lbg + self._extra_lb), np.array(ubg + self._extra_ub)
 
-    def linear_violation(self, q: np.ndarray) -> float:
-        """Largest violation [rad] of joint limits and linear constraints at ``q`` (n,)."""
+    def linear_violation(self, q: np.ndarray, p: np.ndarray | None = None) -> float:
+        """Largest violation of joint limits [rad], linear constraints [rad] and the extra
+        constraints (their units; needs the parameter vector ``p``) at ``q`` (n,)."""
         v = max(0.0, float(np.max(self.lbx - q)), float(np.max(q - self.ubx)))
         if self.linear is not None:
             c = self.linear.C @ q
             v = max(v, float(np.max(self.linear.lb - c)), float(np.max(c - self.linear.ub)))
+        if self._extra_fn is not None and p is not None:
+            c = np.array(self._extra_fn(q, p)).reshape(-1)
+            lb, ub = np.array(self._extra_lb), np.array(self._extra_ub)
+            v = max(v, float(np.max(lb - c)), float(np.max(c - ub)))
         return v

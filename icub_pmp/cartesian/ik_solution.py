@@ -25,8 +25,8 @@ class IkSolution:
         position_error: ||x_d - K_x(q)|| [m].
         orientation_error: rotation angle between target and reached orientation [rad];
             NaN for a position-only request.
-        constraint_violation: largest violation of the joint limits and linear constraints
-            [rad] (0 when met).
+        constraint_violation: largest violation of the joint limits, the linear (shoulder)
+            constraints [rad] and any extra constraint (its own units); 0 when met.
         solve_time: wall time of the solve [s].
         iterations: IPOPT iterations.
         status: IPOPT return status (``Solve_Succeeded``, ``Infeasible_Problem_Detected``,

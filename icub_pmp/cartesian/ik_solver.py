@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from icub_pmp.cartesian.ik_config import IkConfig
-from icub_pmp.cartesian.ik_problem import IkProblem
+from icub_pmp.cartesian.ik_problem import IkProblem, NlpConstraint
 from icub_pmp.cartesian.ik_solution import IkSolution
 from icub_pmp.cartesian.kinematic_chain import CHAIN_NAMES, KinematicChain
 from icub_pmp.errors import InvalidInput, UnknownName
@@ -37,11 +38,22 @@ class IkSolver:
     Args:
         model: the pinocchio model (built from config/robot.yaml when omitted).
         config: solver parameters.
+        constraints: additional constraints per chain name (:class:`NlpConstraint`), added to
+            the shoulder constraints of that chain's NLP.
     """
 
-    def __init__(self, model: IcubModel | None = None, config: IkConfig | None = None):
+    def __init__(
+        self,
+        model: IcubModel | None = None,
+        config: IkConfig | None = None,
+        constraints: Mapping[str, Sequence[NlpConstraint]] | None = None,
+    ):
         self.model = model or IcubModel()
         self.config = config or IkConfig()
+        self.constraints = dict(constraints or {})
+        for name in self.constraints:
+            if name not in CHAIN_NAMES:
+                raise UnknownName("chain", name, CHAIN_NAMES)
         self._problems: dict[str, IkProblem] = {}
         self._q_rest_full = self.model.posture(self.config.rest_posture)
 
@@ -65,7 +77,9 @@ class IkSolver:
             raise UnknownName("chain", chain, CHAIN_NAMES)
         if chain not in self._problems:
             kc = KinematicChain.from_name(chain, self.model.spec)
-            self._problems[chain] = IkProblem(self.model, kc, self.config)
+            self._problems[chain] = IkProblem(
+                self.model, kc, self.config, self.constraints.get(chain, ())
+            )
         return self._problems[chain]
 
     def rest_weights(self, chain: KinematicChain) -> np.ndarray:
@@ -134,14 +148,14 @@ class IkSolver:
         if not np.all(np.isfinite(q)):
             q, status = x0, "exception"
         q = np.clip(q, prob.lbx, prob.ubx)  # IPOPT relaxes bounds by ~1e-8 rad
-        return self._evaluate(prob, q, x_d, R_d, q_fixed, eps, dt, iterations, status,
+        return self._evaluate(prob, q, p, x_d, R_d, q_fixed, eps, dt, iterations, status,
                               status_detail)
 
-    def _evaluate(self, prob, q, x_d, R_d, q_fixed, eps, dt, iterations, status, detail):
+    def _evaluate(self, prob, q, p, x_d, R_d, q_fixed, eps, dt, iterations, status, detail):
         pos, rot = prob.kinematics.pose(np.concatenate([np.asarray(q_fixed, float), q]))
         perr = float(np.linalg.norm(x_d - pos))
         oerr = math.nan if R_d is None else rotation_angle(R_d, rot)
-        viol = prob.linear_violation(q)
+        viol = prob.linear_violation(q, p)
         tol_pos = math.sqrt(eps + self.config.constraint_tolerance)
         feasible = perr <= tol_pos * (1 + 1e-9) and viol <= 1e-6
         converged = status in _CONVERGED
