@@ -77,16 +77,23 @@ class JacobianProvider(abc.ABC):
         return np.einsum("kiq,ki->q", kin.jacobians[:, :3, :], np.asarray(forces, dtype=float))
 
     def static_torque_jacobian(
-        self, q: np.ndarray, frames: Sequence[str], forces: np.ndarray, gravity: bool
+        self,
+        q: np.ndarray,
+        frames: Sequence[str],
+        forces: np.ndarray,
+        gravity: bool,
+        joints: Sequence[int] | None = None,
     ) -> np.ndarray:
-        """d(static_torques)/dq (nq, nq) [N m/rad]; default: central finite differences."""
+        """d(static_torques)/dq_j (nq, len(joints)) [N m/rad] for the joint indices ``joints``
+        (default all); central finite differences of :meth:`static_torques`."""
         q = np.asarray(q, dtype=float)
-        out = np.empty((self.nq, self.nq))
+        cols = range(self.nq) if joints is None else list(joints)
+        out = np.empty((self.nq, len(cols)))
         eps = 1e-6
-        for j in range(self.nq):
+        for c, j in enumerate(cols):
             dq = np.zeros(self.nq)
             dq[j] = eps
-            out[:, j] = (
+            out[:, c] = (
                 self.static_torques(q + dq, frames, forces, gravity)
                 - self.static_torques(q - dq, frames, forces, gravity)
             ) / (2 * eps)

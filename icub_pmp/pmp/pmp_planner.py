@@ -119,7 +119,7 @@ class PmpPlanner:
                 raise UnknownName("joint", j, self._names)
         trunk = self.spec.torso_joints if goal.use_torso else ()
         arms = {h: self.spec.arm_joints(h) for h in goal.hands}
-        trunk_a = np.array(c.trunk_admittance) * goal.trunk_admittance_scale
+        trunk_a = np.array(c.trunk_admittance)[: len(trunk)] * goal.trunk_admittance_scale
         arm_a = {h: np.array(c.arm_admittance) for h in goal.hands}
         if c.range_normalised_admittance:  # eq 6's normalised joint angles, equal admittance
             trunk_a = trunk_a * self._range_factor(trunk)

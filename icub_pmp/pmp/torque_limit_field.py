@@ -91,8 +91,8 @@ class TorqueLimitField:
             n = len(self.joint_index)
             return np.zeros(n), np.zeros(n), 0.0
         sens = self.provider.static_torque_jacobian(
-            q_full, self.frames, self.forces, self.gravity
-        )[:, self.joint_index]  # (nq, n): d tau / d q_network
+            q_full, self.frames, self.forces, self.gravity, self.joint_index
+        )  # (nq, n): d tau / d q_network
         active = eps != 0.0
         ws = sens[active] * self._w[active, None]
         t_sat = -(ws.T @ eps[active])
