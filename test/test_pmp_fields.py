@@ -231,8 +231,8 @@ def test_branch_network_validation():
 
 # ---------------------------------------------------------------------- configuration
 def test_shipped_yaml_loads_into_pmp_config():
-    """config/pmp.yaml holds a valid PmpConfig (field names = ROS parameter names)."""
-    cfg = PmpConfig.from_yaml(config_dir() / "pmp.yaml", "pmp_planner")
+    """config/pmp_planner.yaml holds a valid PmpConfig (field names = ROS parameter names)."""
+    cfg = PmpConfig.from_yaml(config_dir() / "pmp_planner.yaml", "pmp_planner")
     assert cfg.tau > 0 and len(cfg.arm_admittance) == 7
 
 
