@@ -69,7 +69,6 @@ class _Active:
     trajectory: SampledTrajectory
     chain: str
     q_hold: np.ndarray
-    generator: MinJerkGenerator
 
 
 class CartesianSolverNode(Node):
@@ -242,7 +241,7 @@ class CartesianSolverNode(Node):
         traj = gen.rollout()
         msg = arrays_to_trajectory(traj.joint_names, traj.t, traj.q, traj.qd, stamp=now.to_msg())
         self.traj_pub.publish(msg)
-        self._active = _Active(now, traj, chain, q_start, gen)
+        self._active = _Active(now, traj, chain, q_start)
         resp.trajectory = msg
         resp.message = (
             f"{sol.message}; trajectory of {len(traj.t)} points over {traj.duration:.2f} s"
