@@ -132,3 +132,30 @@ def test_go_to_pose_publishes_a_min_jerk_trajectory(graph, ros_probe):
     assert r2.success, r2.message
     assert "continued from the running one" in r2.message
     ros_probe.node.destroy_subscription(sub)
+
+
+def test_parameters_validated_at_run_time(graph, ros_probe):
+    """Setting a bad parameter (epsilon < 0, unknown chain) is refused with a reason; a good
+    one (epsilon) is accepted and used by the next solve."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    solver, _ = graph
+    _ready(ros_probe, solver)
+
+    def set_param(name, value):
+        if isinstance(value, str):
+            pv = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
+        else:
+            pv = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
+        req = SetParameters.Request(parameters=[Parameter(name=name, value=pv)])
+        return ros_probe.call("/cartesian_solver/set_parameters", SetParameters, req).results[0]
+
+    bad = set_param("epsilon", -1.0)
+    assert not bad.successful and "epsilon" in bad.reason
+    bad = set_param("default_chain", "tail")
+    assert not bad.successful and "tail" in bad.reason
+    assert set_param("epsilon", 1e-4).successful  # 10 mm allowed
+    r = ros_probe.call("/cartesian/solve_pose", SolvePose, _request(SolvePose))
+    assert r.success and r.position_error > 2e-3  # the looser bound is used
+    assert set_param("epsilon", 2.5e-7).successful
