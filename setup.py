@@ -10,6 +10,7 @@ PACKAGE = "icub_pmp"
 NODES = [
     "cartesian_solver",
     "motion_segmenter",
+    "pmp_planner",
     "posture_publisher",
 ]
 

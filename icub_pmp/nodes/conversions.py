@@ -12,7 +12,8 @@ from typing import Iterable, Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
-from geometry_msgs.msg import Point, Pose, Quaternion, Vector3, Wrench
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Vector3, Wrench
+from nav_msgs.msg import Path
 from sensor_msgs.msg import Image, JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -35,6 +36,7 @@ __all__ = [
     "matrix_to_quat_wxyz",
     "trajectory_to_arrays",
     "arrays_to_trajectory",
+    "positions_to_path",
     "image_to_array",
     "array_to_image",
     "IMAGE_ENCODINGS",
@@ -270,6 +272,32 @@ def arrays_to_trajectory(
             pt.velocities = np.asarray(velocities[k], dtype=float).tolist()
         pt.time_from_start = sec_to_duration(float(t))
         msg.points.append(pt)
+    return msg
+
+
+def positions_to_path(
+    positions: np.ndarray,
+    frame_id: str,
+    stamp: Time | None = None,
+    times: Sequence[float] | None = None,
+) -> Path:
+    """(N, 3) positions [m] -> nav_msgs/Path in ``frame_id`` (identity orientations); each
+    pose is stamped ``stamp + times[k]`` when ``times`` [s] are given, else ``stamp``."""
+    positions = np.asarray(positions, dtype=float)
+    msg = Path()
+    msg.header.frame_id = frame_id
+    base = time_to_sec(stamp) if stamp is not None else 0.0
+    if stamp is not None:
+        msg.header.stamp = stamp
+    for k, p in enumerate(positions):
+        ps = PoseStamped()
+        ps.header.frame_id = frame_id
+        if times is not None:
+            ps.header.stamp = sec_to_time(base + float(times[k]))
+        elif stamp is not None:
+            ps.header.stamp = stamp
+        ps.pose = arrays_to_pose(p)
+        msg.poses.append(ps)
     return msg
 
 

@@ -1,0 +1,251 @@
+"""pmp_planner: the PMP planner (Mohan et al. 2009) as a ROS 2 node.
+
+Service ``/pmp/reach`` (icub_interfaces/srv/Reach): plans the goal with a PMP network from the
+request's ``start_state`` (if given; joints it lacks come from the latest /joint_states, else
+the rest posture), else from the latest ``/joint_states``; with neither, from the ``rest``
+posture of config/robot.yaml (parameter ``plan_from_rest_without_state``; the answer's message
+says so and the plan is not executed, since the robot's real posture is unknown). Answers
+success, per-hand residuals (the distance left at tau, Sect. 4) and the planned
+``trajectory_msgs/JointTrajectory`` (the network's joints, time_from_start 0 .. tau).
+
+A plan is executed, i.e. published on ``/joint_trajectory``, only when the request is not
+``simulate_only`` and the mental simulation succeeded (Sect. 4: "if the forward simulation is
+successful, the movement is executed"). The predicted hand paths are always published on
+``/pmp/predicted_path/left_hand`` and ``.../right_hand`` (nav_msgs/Path, root_link).
+
+Target frames: empty or ``root_link``, or any frame of the iCub model (the target is then
+expressed in that frame at the start posture). Bad goals (NaN, unknown hand or frame, tau < 0,
+no hand, a zero quaternion) answer success=false with a message; the node never dies on a
+request. Parameters: config/pmp_planner.yaml (= :class:`icub_pmp.pmp.PmpConfig` + the node's).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import rclpy
+from nav_msgs.msg import Path
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
+
+from icub_interfaces.srv import Reach
+from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_spec import HANDS
+from icub_pmp.nodes.conversions import (
+    arrays_to_trajectory,
+    joint_state_field,
+    pose_to_arrays,
+    positions_to_path,
+    quat_wxyz_to_matrix,
+    validate_joint_state,
+)
+from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
+
+__all__ = ["PmpPlannerNode", "main"]
+
+#: parameters of the node itself (beyond PmpConfig): name -> (default, description)
+NODE_PARAMETERS = {
+    "plan_from_rest_without_state": (
+        True, "no /joint_states yet and no start_state: plan from 'rest' (not executed)"),
+    "joint_state_timeout": (0.0, "[s] older /joint_states count as missing (0 = any age)"),
+    "warm_up": (True, "build the bimanual+torso posture memory before serving"),
+}
+
+
+class PmpPlannerNode(Node):
+    """Serves /pmp/reach with a :class:`~icub_pmp.pmp.PmpPlanner`."""
+
+    def __init__(self) -> None:
+        super().__init__("pmp_planner")
+        defaults = PmpConfig().to_dict()
+        for name, value in defaults.items():
+            self.declare_parameter(name, value, ParameterDescriptor(
+                description=f"PmpConfig.{name} (see config/pmp_planner.yaml)"))
+        for name, (value, text) in NODE_PARAMETERS.items():
+            self.declare_parameter(name, value, ParameterDescriptor(description=text))
+        try:
+            self.config = PmpConfig.from_dict(
+                {n: self.get_parameter(n).value for n in defaults})
+        except ConfigError as exc:
+            raise SystemExit(f"pmp_planner: bad parameters: {exc}") from exc
+        self._check_node_parameters({n: self.get_parameter(n).value for n in NODE_PARAMETERS})
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.planner = PmpPlanner(self.config)
+        self._names = self.planner.provider.joint_names
+        self._valid_state_names = set(self.planner.spec.actuated_joints)
+        self._latest: dict[str, float] | None = None
+        self._latest_time = 0.0
+        self.create_subscription(
+            JointState, "/joint_states", self._on_joint_states, qos_profile_sensor_data)
+        reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        self.trajectory_pub = self.create_publisher(JointTrajectory, "/joint_trajectory", reliable)
+        self.path_pubs = {
+            h: self.create_publisher(Path, f"/pmp/predicted_path/{h}_hand", reliable)
+            for h in HANDS
+        }
+        if self.get_parameter("warm_up").value:
+            t0 = time.perf_counter()
+            self.planner.warm_up()
+            self.get_logger().info(
+                f"posture memory ready ({self.config.posture_memory_size} postures, "
+                f"{time.perf_counter() - t0:.2f} s)")
+        self.create_service(Reach, "/pmp/reach", self._on_reach)
+        self.get_logger().info("serving /pmp/reach")
+
+    # ------------------------------------------------------------------ parameters
+    @staticmethod
+    def _check_node_parameters(values: dict) -> None:
+        t = values.get("joint_state_timeout", 0.0)
+        if not isinstance(t, float) or not math.isfinite(t) or t < 0:
+            raise ConfigError(f"joint_state_timeout: expected a float >= 0 s, got {t!r}")
+
+    def _on_set_parameters(self, params: list) -> SetParametersResult:
+        current = {n: self.get_parameter(n).value for n in PmpConfig.field_names()}
+        node_values = {n: self.get_parameter(n).value for n in NODE_PARAMETERS}
+        for p in params:
+            if p.name in current:
+                current[p.name] = p.value
+            elif p.name in node_values:
+                node_values[p.name] = p.value
+        try:
+            config = PmpConfig.from_dict(current)
+            self._check_node_parameters(node_values)
+        except ConfigError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        if config != self.config:
+            self.config = config
+            self.planner = PmpPlanner(config, provider=self.planner.provider)
+        return SetParametersResult(successful=True)
+
+    # ------------------------------------------------------------------ joint states
+    def _on_joint_states(self, msg: JointState) -> None:
+        try:
+            validate_joint_state(msg, valid_names=self._valid_state_names)
+        except IcubPmpError as exc:
+            self.get_logger().warning(f"dropping /joint_states: {exc}", throttle_duration_sec=5.0)
+            return
+        self._latest = joint_state_field(msg)
+        self._latest_time = time.monotonic()
+
+    def _current_state(self) -> dict[str, float] | None:
+        timeout = float(self.get_parameter("joint_state_timeout").value)
+        if self._latest is None:
+            return None
+        if timeout > 0 and time.monotonic() - self._latest_time > timeout:
+            return None
+        return self._latest
+
+    # ------------------------------------------------------------------ service
+    def _on_reach(self, req: Reach.Request, res: Reach.Response) -> Reach.Response:
+        t0 = time.perf_counter()
+        try:
+            start, assumed, note = self._start_of(req)
+            goal = self._goal_of(req, start)
+            plan = self.planner.plan(goal, start)
+        except IcubPmpError as exc:
+            res.success = False
+            res.message = str(exc)
+            self.get_logger().warning(f"/pmp/reach rejected: {exc}")
+            return res
+        except Exception as exc:  # never die on a request
+            res.success = False
+            res.message = f"internal error: {type(exc).__name__}: {exc}"
+            self.get_logger().error(f"/pmp/reach failed: {res.message}")
+            return res
+        res.hands = list(plan.hands)
+        res.residuals = [float(plan.residuals[h]) for h in plan.hands]
+        res.trajectory = arrays_to_trajectory(
+            plan.joint_names, plan.t, plan.positions, plan.velocities)
+        execute = plan.success and not req.simulate_only and not assumed
+        if execute:
+            self.trajectory_pub.publish(res.trajectory)
+        stamp = self.get_clock().now().to_msg()
+        for h in plan.hands:
+            self.path_pubs[h].publish(
+                positions_to_path(plan.hand_paths[h], "root_link", stamp, plan.t))
+        res.success = plan.success
+        if req.simulate_only:
+            what = "simulated only"
+        elif execute:
+            what = "published on /joint_trajectory"
+        else:
+            what = "not executed"
+        res.message = f"{plan.message}; {what}{note}"
+        self.get_logger().info(
+            f"/pmp/reach {list(plan.hands)}: {res.message} "
+            f"[{(time.perf_counter() - t0) * 1e3:.1f} ms with messages]")
+        return res
+
+    def _start_of(self, req: Reach.Request) -> tuple[dict[str, float], bool, str]:
+        """(start {joint: angle}, whether the posture was assumed, note for the message)."""
+        current = self._current_state()
+        if req.start_state.name:
+            validate_joint_state(req.start_state, valid_names=self._valid_state_names)
+            start = dict(current or self.planner.spec.posture("rest"))
+            start.update(joint_state_field(req.start_state))
+            note = "" if current else " (joints missing from start_state taken from 'rest')"
+            return start, False, note
+        if current is not None:
+            return dict(current), False, ""
+        if not self.get_parameter("plan_from_rest_without_state").value:
+            raise InvalidInput("no /joint_states received yet and no start_state given")
+        return (dict(self.planner.spec.posture("rest")), True,
+                " (no /joint_states received: planned from the rest posture)")
+
+    def _goal_of(self, req: Reach.Request, start: dict[str, float]) -> ReachGoal:
+        """Validate the request and build the ReachGoal (targets in root_link)."""
+        hands = list(req.hands)
+        if not hands:
+            raise InvalidInput("hands: empty; give 'left', 'right' or both")
+        if len(set(hands)) != len(hands):
+            raise InvalidInput(f"hands: {hands} names a hand twice")
+        for h in hands:
+            if h not in HANDS:
+                raise UnknownName("hand", h, HANDS)
+        if not math.isfinite(req.tau) or req.tau < 0:
+            raise InvalidInput(f"tau: expected a finite duration >= 0 s (0 = default), "
+                               f"got {req.tau}")
+        q_start = self.planner.start_configuration(start)
+        targets, orientations = {}, {}
+        for h in hands:
+            msg = req.left_target if h == "left" else req.right_target
+            pos, quat = pose_to_arrays(msg.pose)
+            frame = msg.header.frame_id or "root_link"
+            if frame != "root_link":
+                provider = self.planner.provider
+                if frame not in provider.frame_names():
+                    raise UnknownName("frame", frame, provider.frame_names())
+                pose = provider.icub.frame_pose(q_start, frame)
+                rot = pose.rotation @ quat_wxyz_to_matrix(quat)
+                pos = pose.rotation @ pos + pose.translation
+            else:
+                rot = quat_wxyz_to_matrix(quat)
+            targets[h] = pos
+            if req.use_orientation:
+                orientations[h] = rot
+        return ReachGoal(targets=targets, orientations=orientations, use_torso=req.use_torso,
+                         tau=req.tau if req.tau > 0 else None)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point (``ros2 run icub_pmp pmp_planner``)."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = PmpPlannerNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()
