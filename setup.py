@@ -12,6 +12,7 @@ NODES = [
     "motion_segmenter",
     "pmp_planner",
     "posture_publisher",
+    "robot_state_publisher",
 ]
 
 setup(

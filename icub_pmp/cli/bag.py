@@ -140,8 +140,9 @@ def format_info(info: BagInfo) -> str:
     def when(ns: int) -> str:
         if not ns:
             return "-"
-        t = datetime.datetime.fromtimestamp(ns / 1e9)
-        return f"{t:%b %d %Y %H:%M:%S}.{ns % 1_000_000_000:09d} ({ns / 1e9:.9f})"
+        sec, nsec = divmod(ns, 1_000_000_000)
+        t = datetime.datetime.fromtimestamp(sec)
+        return f"{t:%b %d %Y %H:%M:%S}.{nsec:09d} ({sec}.{nsec:09d})"
 
     state = {
         BagStatus.CLOSED: "closed cleanly",
