@@ -20,7 +20,8 @@ error (mu = 1e-5 as in the paper). (b) and (c) are tuned to cover 90 % of the mo
 (a). Each joint reference is tracked by the same critically damped 2nd-order servo (5 Hz), as a
 robot's position loop would; the jerk is that of the hand path, mean ||d^3x/dt^3|| over 2 T.
 
-Ends with one JSON line. Timing figures depend on the machine's load (printed).
+Ends with one JSON line. Wall-clock times depend on the machine's load (printed); the CPU times
+(process_time) are much less sensitive to it and are reported beside them.
 """
 
 from __future__ import annotations
@@ -123,9 +124,11 @@ def run_methods(model, targets, methods, orientation_modes=(False, True)):
         for ori in orientation_modes:
             rows = []
             for T in targets[:subset]:
+                c0 = time.process_time()
                 t0 = time.perf_counter()
                 q = fn(T, ori)
                 dt = time.perf_counter() - t0
+                dc = time.process_time() - c0
                 qf = rest.copy()
                 qf[idx] = q
                 M = model.frame_pose(qf, chain.frame)
@@ -136,6 +139,7 @@ def run_methods(model, targets, methods, orientation_modes=(False, True)):
                     max(0.0, float(np.max(lo - q)), float(np.max(q - hi))),
                     alc.violation(chain.joints, q),
                     float(np.abs(q[:3]).max()),
+                    dc,
                 ))
             out[name]["pose" if ori else "pos"] = np.array(rows)
     return out
@@ -156,6 +160,8 @@ def summarise(res):
             "ori_err_deg_p95": float(np.degrees(np.percentile(a[:, 1], 95))),
             "ms_median": float(np.median(a[:, 2]) * 1e3),
             "ms_p95": float(np.percentile(a[:, 2], 95) * 1e3),
+            "cpu_ms_median": float(np.median(a[:, 6]) * 1e3),
+            "cpu_ms_p95": float(np.percentile(a[:, 6], 95) * 1e3),
             "joint_limit_violations": int(np.sum(a[:, 3] > 1e-6)),
             "tendon_violations": int(np.sum(a[:, 4] > 1e-6)),
             "torso_deg_median": float(np.degrees(np.median(a[:, 5]))),
@@ -370,7 +376,8 @@ def main(argv=None) -> int:
                 print(f"  {name:6s} {mode:4s} n={s['n']:4d} success {s['success_rate']:.4f}  "
                       f"pos {s['pos_err_mm_median']:.3f}/{s['pos_err_mm_p95']:.3f} mm  "
                       f"ori {s['ori_err_deg_median']:.3f}/{s['ori_err_deg_p95']:.3f} deg  "
-                      f"time {s['ms_median']:.2f}/{s['ms_p95']:.2f} ms  "
+                      f"time {s['ms_median']:.2f}/{s['ms_p95']:.2f} ms "
+                      f"(cpu {s['cpu_ms_median']:.2f}/{s['cpu_ms_p95']:.2f})  "
                       f"limits {s['joint_limit_violations']} tendon {s['tendon_violations']}  "
                       f"torso {s['torso_deg_median']:.1f} deg")
     print(f"== jerk ({jerk['n']} reaches, 7-DoF pose): {json.dumps(jerk)}")
@@ -382,8 +389,12 @@ def main(argv=None) -> int:
         "success_rate_pose": r["pose"]["success_rate"],
         "solve_ms_median": r["pos"]["ms_median"],
         "solve_ms_p95": r["pos"]["ms_p95"],
+        "solve_cpu_ms_median": r["pos"]["cpu_ms_median"],
+        "solve_cpu_ms_p95": r["pos"]["cpu_ms_p95"],
         "solve_ms_median_pose": r["pose"]["ms_median"],
         "solve_ms_p95_pose": r["pose"]["ms_p95"],
+        "solve_cpu_ms_median_pose": r["pose"]["cpu_ms_median"],
+        "solve_cpu_ms_p95_pose": r["pose"]["cpu_ms_p95"],
         "pos_err_mm_p95": r["pos"]["pos_err_mm_p95"],
         "ori_err_deg_p95_pose": r["pose"]["ori_err_deg_p95"],
         "joint_limit_violations": r["pos"]["joint_limit_violations"]
@@ -394,9 +405,11 @@ def main(argv=None) -> int:
         "dls_success_rate_pos": res["dls"]["pos"]["success_rate"],
         "dls_success_rate_pose": res["dls"]["pose"]["success_rate"],
         "dls_ms_median": res["dls"]["pos"]["ms_median"],
+        "dls_cpu_ms_median": res["dls"]["pos"]["cpu_ms_median"],
         "pink_success_rate_pos": res["pink"]["pos"]["success_rate"],
         "pink_success_rate_pose": res["pink"]["pose"]["success_rate"],
         "pink_ms_median": res["pink"]["pos"]["ms_median"],
+        "pink_cpu_ms_median": res["pink"]["pos"]["cpu_ms_median"],
         "pmp_success_rate_pos": res["pmp"]["pos"]["success_rate"] if "pmp" in res else None,
         "pmp_success_rate_pose": res["pmp"]["pose"]["success_rate"] if "pmp" in res else None,
         "pmp_n": res["pmp"]["pos"]["n"] if "pmp" in res else 0,
