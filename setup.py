@@ -13,6 +13,7 @@ NODES = [
     "pmp_planner",
     "posture_publisher",
     "robot_state_publisher",
+    "sim_bridge",
 ]
 
 setup(

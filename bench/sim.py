@@ -1,0 +1,198 @@
+"""Benchmark of the simulated iCub (issue 3): physics alone, the node, the node with cameras,
+lockstep with a controller in another process.
+
+    scripts/env.sh python bench/sim.py [--quick]
+
+Figures (real-time factors = simulated s per wall s, medians of windows):
+- physics_rtf: ``Simulator.step`` alone (1 ms steps, robot held, objects on the table).
+- node_rtf: the ``sim_bridge`` node as a subprocess, free-running as fast as possible,
+  publishing /clock, /joint_states, 4 FT, IMU and ground truth every step, no cameras.
+- node_rtf_cameras: the same with both cameras at 30 Hz (sim time), rendered on the worker.
+- lockstep_rtf: ``mode:=lockstep`` with a trivial controller in another process that answers
+  every /joint_states with a PD /effort_command on all 23 joints (stamp copied).
+- render_ms: one frame of both cameras rendered in this process (median) [ms].
+Goals: physics >= 5, node >= 2, node with cameras >= 1, lockstep >= 1.
+Ends by printing one JSON line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+
+
+def physics_rtf(seconds: float) -> float:
+    """Real-time factor of Simulator.step alone (median of 5 windows)."""
+    from icub_sim_bridge import SimConfig, Simulator
+
+    sim = Simulator(SimConfig(cameras_enabled=False))
+    sim.step(200)
+    rates = []
+    for _ in range(5):
+        n = 0
+        t0 = time.perf_counter()
+        while time.perf_counter() - t0 < seconds / 5:
+            sim.step(50)
+            n += 50
+        rates.append(n * sim.config.timestep / (time.perf_counter() - t0))
+    return statistics.median(rates)
+
+
+def render_ms(frames: int) -> float:
+    """Median time [ms] to render both eye cameras once (this thread)."""
+    from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
+
+    sim = Simulator(SimConfig())
+    cams = CameraRenderer(sim.model, sim.built.camera, threaded=False)
+    cams.render(sim.data)
+    times = []
+    for _ in range(frames):
+        sim.step(33)
+        t0 = time.perf_counter()
+        cams.render(sim.data)
+        times.append((time.perf_counter() - t0) * 1e3)
+    cams.close()
+    return statistics.median(times)
+
+
+def _clock_rtf(probe, seconds: float, warmup: float) -> float:
+    """RTF from /clock stamps seen by ``probe`` over ``seconds`` (median of windows)."""
+    from rosgraph_msgs.msg import Clock
+
+    from icub_pmp.nodes.conversions import time_to_sec
+
+    last = {"t": None}
+
+    def cb(msg: Clock) -> None:
+        last["t"] = time_to_sec(msg.clock)
+
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    sub = probe.node.create_subscription(
+        Clock, "/clock", cb, QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+    try:
+        if not probe.wait_for(lambda: last["t"] is not None, 60.0):
+            raise RuntimeError("no /clock from sim_bridge")
+        time.sleep(warmup)
+        rates = []
+        windows = 5
+        for _ in range(windows):
+            t_sim0, t0 = last["t"], time.perf_counter()
+            time.sleep(seconds / windows)
+            rates.append((last["t"] - t_sim0) / (time.perf_counter() - t0))
+        return statistics.median(rates)
+    finally:
+        probe.node.destroy_subscription(sub)
+
+
+def node_rtf(domain: int, seconds: float, params: dict, controller: bool = False) -> float:
+    """Start sim_bridge (and optionally the trivial controller) and measure its RTF."""
+    from icub_pmp.testing import NodeProcess, RosProbe, ros_environment
+
+    env = ros_environment(domain)
+    procs = []
+    probe = RosProbe(domain, name="bench_sim_probe")
+    try:
+        procs.append(NodeProcess("sim_bridge", env=env,
+                                 params_file=ROOT / "config" / "sim_bridge.yaml",
+                                 parameters=params))
+        if controller:
+            procs.append(NodeProcess(command=[sys.executable, str(Path(__file__).resolve()),
+                                              "--controller"], env=env))
+        return _clock_rtf(probe, seconds, warmup=2.0)
+    finally:
+        probe.close()
+        for p in reversed(procs):
+            rc = p.stop()
+            if rc not in (0, None, -2):
+                print(f"bench/sim.py: {p.name} exited with {rc}:\n{p.output()[-2000:]}",
+                      file=sys.stderr)
+
+
+def controller_main() -> None:
+    """A trivial lockstep controller: PD to the first state, answers every /joint_states."""
+    import rclpy
+    from rclpy.experimental import EventsExecutor
+    from rclpy.node import Node
+    from rclpy.qos import qos_profile_sensor_data
+    from sensor_msgs.msg import JointState
+
+    rclpy.init()
+    node = Node("bench_controller")
+    pub = node.create_publisher(JointState, "/effort_command", qos_profile_sensor_data)
+    out = JointState()
+    state = {"q0": None}
+
+    def cb(msg: JointState) -> None:
+        q = np.asarray(msg.position)
+        v = np.asarray(msg.velocity)
+        if state["q0"] is None:
+            state["q0"] = q.copy()
+            out.name = list(msg.name)
+        tau = 20.0 * (state["q0"] - q) - 1.0 * v
+        out.header.stamp = msg.header.stamp
+        out.effort = tau.tolist()
+        pub.publish(out)
+
+    node.create_subscription(JointState, "/joint_states", cb, qos_profile_sensor_data)
+    ex = EventsExecutor()
+    ex.add_node(node)
+    try:
+        while rclpy.ok():
+            ex.spin_once(timeout_sec=0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="short windows (< 2 min)")
+    ap.add_argument("--controller", action="store_true", help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.controller:
+        controller_main()
+        return
+    from icub_pmp.testing import reserve_domain_id
+
+    seconds = 4.0 if a.quick else 15.0
+    res: dict[str, object] = {}
+    t_start = time.perf_counter()
+    res["physics_rtf"] = round(physics_rtf(seconds), 2)
+    res["render_ms"] = round(render_ms(15 if a.quick else 60), 2)
+    with reserve_domain_id() as domain:
+        res["node_rtf"] = round(node_rtf(domain, seconds, {
+            "real_time_factor": 0.0, "cameras_enabled": False}), 2)
+        res["node_rtf_cameras"] = round(node_rtf(domain, seconds, {
+            "real_time_factor": 0.0, "cameras_enabled": True}), 2)
+        res["lockstep_rtf"] = round(node_rtf(domain, seconds, {
+            "real_time_factor": 0.0, "cameras_enabled": False, "mode": "lockstep",
+            "lockstep_timeout": 0.05}, controller=True), 2)
+    res["cpu_count"] = os.cpu_count()
+    res["load_avg_1min"] = round(os.getloadavg()[0], 2)
+    res["wall_s"] = round(time.perf_counter() - t_start, 1)
+    res["goals_met"] = bool(res["physics_rtf"] >= 5 and res["node_rtf"] >= 2
+                            and res["node_rtf_cameras"] >= 1 and res["lockstep_rtf"] >= 1)
+    print(json.dumps(res))
+
+
+if __name__ == "__main__":
+    threading.current_thread().name = "bench_sim"
+    main()

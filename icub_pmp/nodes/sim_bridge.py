@@ -1,0 +1,465 @@
+"""sim_bridge: the simulated iCub on ROS 2 (stands in for iCub_SIM / gazebo-yarp-plugins).
+
+A thin adapter over :class:`icub_sim_bridge.Simulator` (all physics there). Topics, services
+and frames follow ``INTERFACES.md``:
+
+publishes  /clock (every step), /joint_states (every step: position [rad], velocity [rad/s],
+           effort = applied torque [N m], stamp = sim time), /ft/{l_arm_ft,r_arm_ft,l_leg_ft,
+           r_leg_ft} (WrenchStamped every step, frame = the URDF FT frame, child_to_parent:
+           the wrench the distal link exerts on the proximal one), /imu (head_imu_0),
+           /cam/{left,right}/image_raw + camera_info (rgb8 at camera_rate of sim time,
+           frame l_eye_optical / r_eye_optical), /ground_truth/contact_wrench/{left,right}_hand
+           (root_link, about the hand frame), /ground_truth/objects/{box,cylinder} (PoseStamped)
+subscribes /effort_command (JointState name + effort [N m]; any subset of joints; rejected
+           whole with a throttled warning on unknown names, NaN/inf, length mismatch)
+services   /sim/reset (ResetSim), /sim/set_object_pose (SetObjectPose), /sim/set_paused
+           (std_srvs/SetBool), /sim/apply_wrench (ApplyWrench)
+
+Modes (parameter ``mode``): ``free_run`` paced at ``real_time_factor`` (0 = as fast as
+possible) or ``lockstep``: after publishing the state stamped t, the next step waits (up to
+``lockstep_timeout`` s of wall time) for an /effort_command stamped exactly t; on timeout it
+steps with the last valid command and warns (throttled).
+
+Threads: the physics loop runs on the main thread and is the only one touching MuJoCo;
+callbacks run on an ``EventsExecutor`` thread: the effort callback validates and hands the
+command over, service handlers queue a request that the loop executes between two steps and
+wait for its answer (synchronous handlers). Cameras render on their own worker thread.
+"""
+
+from __future__ import annotations
+
+import array
+import collections
+import os
+import signal
+import threading
+import time
+from typing import Any, Callable
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import PoseStamped, WrenchStamped
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
+from std_srvs.srv import SetBool
+
+from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
+from icub_pmp.errors import IcubPmpError
+from icub_pmp.nodes.conversions import (
+    pose_to_arrays,
+    validate_joint_state,
+    wrench_to_array,
+)
+from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
+from icub_sim_bridge.simulator import FT_SENSORS
+
+__all__ = ["SimBridge", "main"]
+
+#: parameters that may change while running (the others shape the model: restart)
+_RUNTIME_PARAMS = {"mode", "real_time_factor", "lockstep_timeout", "imu_decimation",
+                   "ground_truth_decimation", "start_paused"}
+_CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def _set_stamp(stamp: Any, ns: int) -> None:
+    stamp.sec = ns // 1_000_000_000
+    stamp.nanosec = ns % 1_000_000_000
+
+
+def _doubles(a: np.ndarray) -> array.array:
+    return array.array("d", np.ascontiguousarray(a, dtype=float).tobytes())
+
+
+def _set_vec(v: Any, a: np.ndarray) -> None:
+    v.x, v.y, v.z = float(a[0]), float(a[1]), float(a[2])
+
+
+class _Command:
+    """An accepted effort command: stamp [ns], joint indices, torques [N m]."""
+
+    __slots__ = ("stamp_ns", "idx", "tau")
+
+    def __init__(self, stamp_ns: int, idx: np.ndarray, tau: np.ndarray):
+        self.stamp_ns, self.idx, self.tau = stamp_ns, idx, tau
+
+
+class SimBridge(Node):
+    """The sim_bridge node (module doc)."""
+
+    def __init__(self) -> None:
+        super().__init__("sim_bridge")
+        defaults = SimConfig()
+        for name, value in defaults.to_dict().items():
+            self.declare_parameter(name, value, ParameterDescriptor(
+                description=f"SimConfig.{name} (see config/sim_bridge.yaml)",
+                read_only=name not in _RUNTIME_PARAMS))
+        params = {n: self.get_parameter(n).value for n in defaults.field_names()}
+        self.config = SimConfig.from_dict(params)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.sim = Simulator(self.config)
+        self._names = list(self.sim.joint_names)
+        self._valid_names = frozenset(self._names)
+        # --- publishers
+        sd = qos_profile_sensor_data
+        self.pub_clock = self.create_publisher(Clock, "/clock", _CLOCK_QOS)
+        self.pub_js = self.create_publisher(JointState, "/joint_states", sd)
+        self.pub_ft = {n: self.create_publisher(WrenchStamped, f"/ft/{n}", sd)
+                       for n in FT_SENSORS}
+        self.pub_imu = self.create_publisher(Imu, "/imu", sd)
+        self.pub_gt = {h: self.create_publisher(
+            WrenchStamped, f"/ground_truth/contact_wrench/{h}_hand", sd)
+            for h in ("left", "right")}
+        self.pub_obj = {o: self.create_publisher(PoseStamped, f"/ground_truth/objects/{o}", sd)
+                        for o in self.sim.object_names}
+        # --- reusable messages (filled in place every step)
+        self._clock_msg = Clock()
+        self._js = JointState()
+        self._js.name = list(self._names)
+        self._ft_msgs = {}
+        for n in FT_SENSORS:
+            m = WrenchStamped()
+            m.header.frame_id = n
+            self._ft_msgs[n] = m
+        self._imu_msg = Imu()
+        self._imu_msg.header.frame_id = "head_imu_0"
+        self._gt_msgs = {}
+        for h in ("left", "right"):
+            m = WrenchStamped()
+            m.header.frame_id = "root_link"
+            self._gt_msgs[h] = m
+        # --- cameras
+        self.cameras: CameraRenderer | None = None
+        if self.config.cameras_enabled:
+            self._setup_cameras()
+        # --- commands and requests (handed from the executor thread to the loop)
+        self._cmd_lock = threading.Lock()
+        self._pending: collections.deque[_Command] = collections.deque()
+        self._answered = threading.Event()
+        self._last_stamp_ns = 0
+        self._requests: collections.deque[tuple[Callable[[], Any], list, threading.Event]] = \
+            collections.deque()
+        self._wake = threading.Event()
+        self.rejected = 0
+        self.timeouts = 0
+        self.paused = self.config.start_paused
+        self.create_subscription(JointState, "/effort_command", self._on_effort, sd)
+        self.create_service(ResetSim, "/sim/reset", self._srv_reset)
+        self.create_service(SetObjectPose, "/sim/set_object_pose", self._srv_set_object_pose)
+        self.create_service(SetBool, "/sim/set_paused", self._srv_set_paused)
+        self.create_service(ApplyWrench, "/sim/apply_wrench", self._srv_apply_wrench)
+        self.get_logger().info(
+            f"sim_bridge: {len(self._names)} actuated joints, mode {self.config.mode}, "
+            f"real_time_factor {self.config.real_time_factor}, cameras "
+            f"{'on' if self.cameras else 'off'}, FT sign convention child_to_parent")
+
+    # ------------------------------------------------------------------ parameters
+    def _on_set_parameters(self, params: list) -> SetParametersResult:
+        changes = {}
+        for p in params:
+            if p.name == "use_sim_time":
+                if p.value:
+                    return SetParametersResult(successful=False,
+                                               reason="sim_bridge is the clock: use_sim_time "
+                                                      "must stay false")
+                continue
+            if p.name not in SimConfig.field_names():
+                continue
+            if p.name not in _RUNTIME_PARAMS and hasattr(self, "sim"):
+                return SetParametersResult(successful=False,
+                                           reason=f"{p.name} shapes the model: restart the node")
+            changes[p.name] = p.value
+        if not changes or not hasattr(self, "sim"):
+            return SetParametersResult(successful=True)
+        try:
+            cfg = SimConfig.from_dict({**self.config.to_dict(), **changes})
+        except IcubPmpError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        self.config = cfg
+        if "start_paused" in changes:
+            self.paused = cfg.start_paused
+        return SetParametersResult(successful=True)
+
+    # ------------------------------------------------------------------ cameras
+    def _setup_cameras(self) -> None:
+        cam = self.sim.built.camera
+        sd = qos_profile_sensor_data
+        self.pub_img = {s: self.create_publisher(Image, f"/cam/{s}/image_raw", sd)
+                        for s in ("left", "right")}
+        self.pub_info = {s: self.create_publisher(CameraInfo, f"/cam/{s}/camera_info", sd)
+                         for s in ("left", "right")}
+        self._info = {}
+        for side, frame in (("left", "l_eye_optical"), ("right", "r_eye_optical")):
+            info = CameraInfo()
+            info.header.frame_id = frame
+            info.width, info.height = cam.width, cam.height
+            info.distortion_model = "plumb_bob"
+            info.d = [0.0] * 5
+            info.k = [cam.fx, 0.0, cam.cx, 0.0, cam.fy, cam.cy, 0.0, 0.0, 1.0]
+            info.r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+            info.p = [cam.fx, 0.0, cam.cx, 0.0, 0.0, cam.fy, cam.cy, 0.0, 0.0, 0.0, 1.0, 0.0]
+            self._info[side] = info
+        self.cameras = CameraRenderer(self.sim.model, cam, self.config.camera_threaded,
+                                      on_frame=self._publish_images)
+        self._cam_period_ns = int(round(1e9 / self.config.camera_rate))
+        self._next_cam_ns = 0
+
+    def _publish_images(self, t: float, images: dict[str, np.ndarray]) -> None:
+        ns = int(round(t * 1e9))
+        for side, img in images.items():
+            msg = Image()
+            _set_stamp(msg.header.stamp, ns)
+            msg.header.frame_id = self._info[side].header.frame_id
+            msg.height, msg.width = img.shape[0], img.shape[1]
+            msg.encoding = "rgb8"
+            msg.step = img.shape[1] * 3
+            msg.data = img.tobytes()
+            self.pub_img[side].publish(msg)
+            info = self._info[side]
+            _set_stamp(info.header.stamp, ns)
+            self.pub_info[side].publish(info)
+
+    # ------------------------------------------------------------------ effort commands
+    def _on_effort(self, msg: JointState) -> None:
+        stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        try:
+            validate_joint_state(msg, required=("effort",), valid_names=self._valid_names)
+            idx = self.sim.indices(msg.name)
+            tau = np.asarray(msg.effort, dtype=float)
+        except IcubPmpError as exc:
+            self.rejected += 1
+            self.get_logger().warning(f"/effort_command rejected ({self.rejected} so far): "
+                                      f"{exc}", throttle_duration_sec=1.0)
+            if stamp_ns == self._last_stamp_ns:
+                self._answered.set()  # answered, with nothing usable: keep the last command
+            return
+        with self._cmd_lock:
+            self._pending.append(_Command(stamp_ns, idx, tau))
+        if stamp_ns == self._last_stamp_ns:
+            self._answered.set()
+
+    def _apply_pending(self) -> None:
+        if not self._pending:
+            return
+        with self._cmd_lock:
+            cmds = list(self._pending)
+            self._pending.clear()
+        for c in cmds:
+            self.sim.command_indices(c.idx, c.tau)
+
+    # ------------------------------------------------------------------ services
+    def _run_in_loop(self, fn: Callable[[], Any], timeout: float = 10.0) -> tuple[bool, str]:
+        """Queue ``fn`` for the physics loop and wait for it: (success, message)."""
+        result: list = []
+        done = threading.Event()
+        self._requests.append((fn, result, done))
+        self._wake.set()
+        if not done.wait(timeout):
+            return False, f"the simulation loop did not answer within {timeout} s"
+        return result[0]
+
+    def _drain_requests(self) -> None:
+        while self._requests:
+            fn, result, done = self._requests.popleft()
+            try:
+                msg = fn()
+                result.append((True, msg or "ok"))
+            except IcubPmpError as exc:
+                result.append((False, str(exc)))
+            except Exception as exc:  # never let a request kill the loop
+                result.append((False, f"{type(exc).__name__}: {exc}"))
+            done.set()
+
+    def _srv_reset(self, req: ResetSim.Request, resp: ResetSim.Response) -> ResetSim.Response:
+        posture = req.posture or self.config.initial_posture
+
+        def do() -> str:
+            self.sim.reset(posture)
+            with self._cmd_lock:
+                self._pending.clear()
+            return f"reset to posture {posture!r} at t = {self.sim.time:.3f} s"
+
+        resp.success, resp.message = self._run_in_loop(do)
+        return resp
+
+    def _srv_set_object_pose(self, req: SetObjectPose.Request, resp: SetObjectPose.Response
+                             ) -> SetObjectPose.Response:
+        def do() -> str:
+            p, q = pose_to_arrays(req.pose)
+            self.sim.set_object_pose(req.name, p, q)
+            return f"{req.name} at {np.round(p, 4).tolist()}"
+
+        resp.success, resp.message = self._run_in_loop(do)
+        return resp
+
+    def _srv_set_paused(self, req: SetBool.Request, resp: SetBool.Response) -> SetBool.Response:
+        def do() -> str:
+            self.paused = bool(req.data)
+            return f"{'paused' if self.paused else 'running'} at t = {self.sim.time:.3f} s"
+
+        resp.success, resp.message = self._run_in_loop(do)
+        return resp
+
+    def _srv_apply_wrench(self, req: ApplyWrench.Request, resp: ApplyWrench.Response
+                          ) -> ApplyWrench.Response:
+        def do() -> str:
+            w = wrench_to_array(req.wrench)
+            self.sim.apply_wrench(req.target, w[:3], w[3:], req.duration)
+            return f"wrench {w.tolist()} on {req.target} for {req.duration} s"
+
+        resp.success, resp.message = self._run_in_loop(do)
+        return resp
+
+    # ------------------------------------------------------------------ publishing
+    def _publish_state(self) -> None:
+        sim = self.sim
+        ns = int(round(sim.time * 1e9))
+        self._last_stamp_ns = ns
+        _set_stamp(self._clock_msg.clock, ns)
+        self.pub_clock.publish(self._clock_msg)
+        st = sim.joint_state()
+        js = self._js
+        _set_stamp(js.header.stamp, ns)
+        js.position = _doubles(st.position)
+        js.velocity = _doubles(st.velocity)
+        js.effort = _doubles(st.effort)
+        self.pub_js.publish(js)
+        ft = sim.ft_all()
+        for k, n in enumerate(FT_SENSORS):
+            m = self._ft_msgs[n]
+            _set_stamp(m.header.stamp, ns)
+            _set_vec(m.wrench.force, ft[k, :3])
+            _set_vec(m.wrench.torque, ft[k, 3:])
+            self.pub_ft[n].publish(m)
+        step = sim.steps
+        if step % self.config.imu_decimation == 0:
+            imu = sim.imu()
+            m = self._imu_msg
+            _set_stamp(m.header.stamp, ns)
+            q = imu.orientation
+            m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z = (
+                float(q[0]), float(q[1]), float(q[2]), float(q[3]))
+            _set_vec(m.angular_velocity, imu.angular_velocity)
+            _set_vec(m.linear_acceleration, imu.linear_acceleration)
+            self.pub_imu.publish(m)
+        if step % self.config.ground_truth_decimation == 0:
+            for h, m in self._gt_msgs.items():
+                w = sim.contact_wrench(h)
+                _set_stamp(m.header.stamp, ns)
+                _set_vec(m.wrench.force, w.force)
+                _set_vec(m.wrench.torque, w.torque)
+                self.pub_gt[h].publish(m)
+            for o, pub in self.pub_obj.items():
+                pose = sim.object_pose(o)
+                m = PoseStamped()
+                _set_stamp(m.header.stamp, ns)
+                m.header.frame_id = "root_link"
+                _set_vec(m.pose.position, pose.position)
+                q = pose.quaternion
+                m.pose.orientation.w, m.pose.orientation.x = float(q[0]), float(q[1])
+                m.pose.orientation.y, m.pose.orientation.z = float(q[2]), float(q[3])
+                pub.publish(m)
+        if self.cameras is not None and ns >= self._next_cam_ns:
+            self._next_cam_ns = ns + self._cam_period_ns
+            self.cameras.request(sim.data)
+
+    # ------------------------------------------------------------------ the loop
+    def run(self, should_stop: Callable[[], bool]) -> None:
+        """Step, publish, pace / lockstep until ``should_stop()``."""
+        self._publish_state()
+        wall0, sim0 = time.perf_counter(), self.sim.time
+        rtf_prev, mode_prev = self.config.real_time_factor, self.config.mode
+        while not should_stop():
+            if self._requests:
+                self._drain_requests()
+            if self.paused:
+                self._wake.wait(0.05)
+                self._wake.clear()
+                wall0, sim0 = time.perf_counter(), self.sim.time
+                continue
+            cfg = self.config
+            if cfg.real_time_factor != rtf_prev or cfg.mode != mode_prev:
+                wall0, sim0 = time.perf_counter(), self.sim.time
+                rtf_prev, mode_prev = cfg.real_time_factor, cfg.mode
+            if cfg.mode == "lockstep":
+                if not self._answered.wait(cfg.lockstep_timeout):
+                    self.timeouts += 1
+                    self.get_logger().warning(
+                        f"lockstep: no /effort_command stamped t = {self.sim.time:.3f} s within "
+                        f"{cfg.lockstep_timeout} s ({self.timeouts} timeouts so far); stepping "
+                        f"with the last command", throttle_duration_sec=2.0)
+                    if should_stop():
+                        break
+                self._answered.clear()
+            self._apply_pending()
+            self.sim.step()
+            self._publish_state()
+            if cfg.mode == "free_run" and cfg.real_time_factor > 0:
+                target = wall0 + (self.sim.time - sim0) / cfg.real_time_factor
+                ahead = target - time.perf_counter()
+                if ahead > 0.002:
+                    self._wake.wait(ahead - 0.001)
+                    self._wake.clear()
+                elif ahead < -0.1:  # far behind (e.g. a pause in the machine): do not catch up
+                    wall0, sim0 = time.perf_counter(), self.sim.time
+
+    def close(self) -> None:
+        """Stop the camera worker."""
+        if self.cameras is not None:
+            self.cameras.close()
+            self.cameras = None
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point (``ros2 run icub_pmp sim_bridge``).
+
+    The executor spins on the main thread (where rclpy's SIGINT/SIGTERM handling works);
+    the physics loop runs on its own thread and stops with the context. A failure of the
+    physics loop is logged and ends the process.
+    """
+    rclpy.init(args=args)
+    node = None
+    executor = None
+    stop = threading.Event()
+    loop = None
+    try:
+        node = SimBridge()
+        executor = EventsExecutor()
+        executor.add_node(node)
+        loop = threading.Thread(target=_physics, args=(node, stop), name="physics")
+        loop.start()
+        # spin_once in a loop: EventsExecutor.spin() of the Jazzy wheel never returns on
+        # SIGINT, and waking it from another thread deadlocks
+        while rclpy.ok() and loop.is_alive():
+            executor.spin_once(timeout_sec=0.1)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        stop.set()
+        if loop is not None:
+            loop.join(timeout=10.0)
+        if node is not None:
+            node.close()
+            node.destroy_node()
+        if executor is not None:
+            executor.shutdown()
+        rclpy.try_shutdown()
+
+
+def _physics(node: SimBridge, stop: threading.Event) -> None:
+    """The physics thread: on a failure, log it and stop the node (SIGINT to ourselves)."""
+    try:
+        node.run(lambda: stop.is_set() or not rclpy.ok())
+    except Exception as exc:
+        if stop.is_set() or not rclpy.ok():
+            return  # shutting down: publishers may already be invalid
+        node.get_logger().fatal(f"physics loop failed: {type(exc).__name__}: {exc}")
+        os.kill(os.getpid(), signal.SIGINT)
+
+
+if __name__ == "__main__":
+    main()

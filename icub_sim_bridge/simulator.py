@@ -1,0 +1,458 @@
+"""Simulator: the simulated iCub (MuJoCo) behind a small numpy API; no ROS.
+
+One :class:`Simulator` owns an ``MjModel``/``MjData`` built by :class:`ModelBuilder` and
+advances it in fixed steps (``SimConfig.timestep``, 1 ms). Units: m, rad, N, N m, s.
+Frames: world == ``root_link`` (x backward, y right, z up).
+
+Joints (``joint_names`` = ``RobotSpec.actuated_joints``: torso 3, left arm 7, right arm 7,
+neck 3, eyes 3): ``q``/``v``/``tau`` arrays follow that order. The eye coordinates
+``eyes_version`` / ``eyes_vergence`` are tendons over the two eye pans (see ModelBuilder).
+
+Effort commands (:meth:`command`): any subset of joints by name, finite values; values are
+saturated at the ``RobotSpec`` torque limits (``config/robot.yaml``). A joint never named in a
+command since the last :meth:`reset` is *held*: an internal joint PD to its reset posture plus
+gravity compensation (like an iCub joint left in position mode). Naming a joint once hands
+it over to the commanded torque for good (until the next reset).
+
+Sensors after each :meth:`step` (values of the step's dynamics: state at the start of the
+step, torque applied during it):
+- :meth:`ft` -- the four 6-axis FT sensors ``l_arm_ft, r_arm_ft, l_leg_ft, r_leg_ft``:
+  ``(force (3,) [N], torque (3,) [N m])`` in the URDF FT frame (the child link's frame at the
+  sensor joint), **sign convention of the URDF (child_to_parent): the wrench that the child
+  (distal) link exerts on the parent (proximal) link**, moment about the frame origin.
+  E.g. an arm hanging still reads ``+m_distal * g`` (pointing down in root_link).
+- :meth:`imu` -- head IMU at the URDF ``head_imu_0`` frame: orientation (w, x, y, z) of the
+  frame in root_link, angular velocity [rad/s] and proper acceleration [m/s^2] (reads
+  +9.81 up when still) in the frame.
+- :meth:`contact_wrench` -- ground truth: total external wrench on a hand body (contacts +
+  applied forces), root_link axes, moment about the hand frame origin (``l_hand_dh_frame``).
+
+Scene: :meth:`object_pose`, :meth:`set_object_pose` (``box``, ``cylinder``),
+:meth:`apply_wrench` (a scripted external wrench on a body or at a frame for a duration).
+Cameras: :class:`icub_sim_bridge.camera_renderer.CameraRenderer` renders a snapshot.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Iterable, NamedTuple, Sequence
+
+import mujoco
+import numpy as np
+
+from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_spec import RobotSpec
+from icub_sim_bridge.model_builder import OBJECT_NAMES, BuiltModel, ModelBuilder
+from icub_sim_bridge.sim_config import SimConfig
+
+__all__ = ["Simulator", "JointState", "Wrench", "Pose", "ImuReading", "FT_SENSORS",
+           "FT_SIGN_CONVENTION"]
+
+FT_SENSORS = ("l_arm_ft", "r_arm_ft", "l_leg_ft", "r_leg_ft")
+FT_SIGN_CONVENTION = "child_to_parent"
+_HANDS = ("left", "right")
+_TENDON_JOINTS = ("eyes_version", "eyes_vergence")
+#: hold gains per N m of torque limit: kp = 5 * tau_max [N m/rad], kd = 0.2 * tau_max [N m s/rad]
+_HOLD_KP_PER_NM = 5.0
+_HOLD_KD_PER_NM = 0.2
+
+
+class JointState(NamedTuple):
+    """Joint positions [rad], velocities [rad/s], applied torques [N m], all (n,)."""
+
+    time: float
+    position: np.ndarray
+    velocity: np.ndarray
+    effort: np.ndarray
+
+
+class Wrench(NamedTuple):
+    """Force (3,) [N] and torque (3,) [N m]."""
+
+    force: np.ndarray
+    torque: np.ndarray
+
+
+class Pose(NamedTuple):
+    """Position (3,) [m] and orientation quaternion (w, x, y, z)."""
+
+    position: np.ndarray
+    quaternion: np.ndarray
+
+
+class ImuReading(NamedTuple):
+    """Orientation (w, x, y, z) in root_link, angular velocity (3,) [rad/s] and proper
+    acceleration (3,) [m/s^2] in the IMU frame."""
+
+    orientation: np.ndarray
+    angular_velocity: np.ndarray
+    linear_acceleration: np.ndarray
+
+
+@dataclasses.dataclass
+class _AppliedWrench:
+    body: int
+    point_body: np.ndarray  # application point in the body frame [m]
+    force: np.ndarray  # root_link [N]
+    torque: np.ndarray  # root_link [N m]
+    until: float  # sim time [s]
+
+
+class Simulator:
+    """The simulated iCub (see module doc)."""
+
+    def __init__(self, config: SimConfig | None = None, spec: RobotSpec | None = None,
+                 built: BuiltModel | None = None):
+        self.config = config or SimConfig()
+        self.spec = spec or RobotSpec.load()
+        self.built = built or ModelBuilder(self.config, self.spec).build()
+        m = self.model = self.built.model
+        self.data = mujoco.MjData(m)
+        self.joint_names: tuple[str, ...] = tuple(self.spec.actuated_joints)
+        self.n = len(self.joint_names)
+        self._index = {n: i for i, n in enumerate(self.joint_names)}
+        self.torque_limits = np.array([self.spec.torque_limit(j) for j in self.joint_names])
+        self.torque_limits.setflags(write=False)
+        # joints vs tendons
+        self._jidx = np.array([i for i, n in enumerate(self.joint_names)
+                               if n not in _TENDON_JOINTS], dtype=int)
+        self._tidx = np.array([i for i, n in enumerate(self.joint_names)
+                               if n in _TENDON_JOINTS], dtype=int)
+        jids = [self._id(mujoco.mjtObj.mjOBJ_JOINT, self.joint_names[i]) for i in self._jidx]
+        self._qadr = np.array([m.jnt_qposadr[j] for j in jids], dtype=int)
+        self._dadr = np.array([m.jnt_dofadr[j] for j in jids], dtype=int)
+        self._tids = np.array([self._id(mujoco.mjtObj.mjOBJ_TENDON, self.joint_names[i])
+                               for i in self._tidx], dtype=int)
+        self._act = np.array([self._id(mujoco.mjtObj.mjOBJ_ACTUATOR, n)
+                              for n in self.joint_names], dtype=int)
+        lo = np.empty(self.n)
+        hi = np.empty(self.n)
+        lo[self._jidx] = [m.jnt_range[j][0] for j in jids]
+        hi[self._jidx] = [m.jnt_range[j][1] for j in jids]
+        lo[self._tidx] = m.tendon_range[self._tids, 0]
+        hi[self._tidx] = m.tendon_range[self._tids, 1]
+        self.lower, self.upper = lo, hi
+        self.lower.setflags(write=False)
+        self.upper.setflags(write=False)
+        # sensors
+        self._ft_adr = {}
+        for name in FT_SENSORS:
+            fa = m.sensor_adr[self._id(mujoco.mjtObj.mjOBJ_SENSOR, f"{name}_force")]
+            ta = m.sensor_adr[self._id(mujoco.mjtObj.mjOBJ_SENSOR, f"{name}_torque")]
+            self._ft_adr[name] = (fa, ta)
+        self._imu_adr = {k: m.sensor_adr[self._id(mujoco.mjtObj.mjOBJ_SENSOR, f"imu_{k}")]
+                         for k in ("gyro", "accelerometer", "orientation")}
+        self._hand_body = {h: self._id(mujoco.mjtObj.mjOBJ_BODY, self.built.hand_bodies[h])
+                           for h in _HANDS}
+        self._hand_site = {h: self._id(mujoco.mjtObj.mjOBJ_SITE, self.built.hand_frames[h])
+                           for h in _HANDS}
+        self._objects = {}
+        for name in OBJECT_NAMES:
+            b = self._id(mujoco.mjtObj.mjOBJ_BODY, name)
+            jnt = m.body_jntadr[b]
+            self._objects[name] = (b, m.jnt_qposadr[jnt], m.jnt_dofadr[jnt])
+        self._object_home = {n: self.data.qpos[a:a + 7].copy()
+                             for n, (_, a, _) in self._objects.items()}
+        # hold gains (an affine actuator PD, see _set_held) and the dofs for gravity terms
+        self._kp = _HOLD_KP_PER_NM * self.torque_limits
+        self._kd = _HOLD_KD_PER_NM * self.torque_limits
+        self._dof_of = np.full(self.n, -1, dtype=int)
+        self._dof_of[self._jidx] = self._dadr
+        self._applied: list[_AppliedWrench] = []
+        self._xfrc_dirty = False
+        self._tau_cmd = np.zeros(self.n)
+        self._commanded = np.zeros(self.n, dtype=bool)
+        self._q_hold = np.zeros(self.n)
+        self._held_act = np.zeros(0, dtype=int)
+        self._held_dof = np.zeros(0, dtype=int)
+        self._held_base = np.zeros(0)
+        self._grav_act = np.zeros(0, dtype=int)
+        self._grav_dof = np.zeros(0, dtype=int)
+        self._grav_kp = np.zeros(0)
+        self.steps = 0
+        self.reset(self.config.initial_posture)
+
+    # ------------------------------------------------------------------ names
+    def _id(self, kind: mujoco.mjtObj, name: str) -> int:
+        i = mujoco.mj_name2id(self.model, kind, name)
+        if i < 0:
+            raise UnknownName(str(kind).split("_")[-1].lower(), name, [])
+        return i
+
+    def indices(self, names: Iterable[str]) -> np.ndarray:
+        """Positions in ``joint_names`` of ``names`` (raises :class:`UnknownName`)."""
+        out = []
+        for n in names:
+            i = self._index.get(n)
+            if i is None:
+                raise UnknownName("joint", n, self.joint_names)
+            out.append(i)
+        return np.array(out, dtype=int)
+
+    @property
+    def time(self) -> float:
+        """Simulated time [s] (monotonic: a reset does not rewind it)."""
+        return float(self.data.time)
+
+    # ------------------------------------------------------------------ state
+    def reset(self, posture: str | None = None, q: dict[str, float] | None = None) -> None:
+        """Put the robot at a named posture (``config/robot.yaml``) or at ``q`` {joint: rad}
+        (other joints 0), at rest; objects back home; applied wrenches cleared; every joint
+        back on hold (module doc). Time keeps running (``/clock`` never goes back)."""
+        values = self.spec.posture(posture or self.config.initial_posture) if q is None \
+            else self._posture_dict(q)
+        t = self.data.time
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.time = t
+        target = np.array([values.get(n, 0.0) for n in self.joint_names])
+        target = np.clip(target, self.lower, self.upper)
+        self._write_q(target)
+        for name, (_, a, _) in self._objects.items():
+            self.data.qpos[a:a + 7] = self._object_home[name]
+        mujoco.mj_forward(self.model, self.data)
+        self._q_hold = target
+        self._tau_cmd = np.zeros(self.n)
+        self._commanded = np.zeros(self.n, dtype=bool)
+        self._set_held()
+        self._applied.clear()
+
+    def _posture_dict(self, q: dict[str, float]) -> dict[str, float]:
+        for n, v in q.items():
+            if n not in self._index:
+                raise UnknownName("joint", n, self.joint_names)
+            if not np.isfinite(v):
+                raise InvalidInput(f"q[{n!r}] = {v} is not finite")
+        return dict(q)
+
+    def _write_q(self, q: np.ndarray) -> None:
+        """Write actuated positions; eye version/vergence go to the two eye pans."""
+        d, m = self.data, self.model
+        d.qpos[self._qadr] = q[self._jidx]
+        ver = q[self._index["eyes_version"]]
+        vg = q[self._index["eyes_vergence"]]
+        for name, val in (("l_eye_pan", ver + 0.5 * vg), ("r_eye_pan", ver - 0.5 * vg)):
+            d.qpos[m.jnt_qposadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, name)]] = val
+
+    def joint_state(self) -> JointState:
+        """Positions, velocities and applied torques of ``joint_names`` (copies)."""
+        d = self.data
+        q = np.empty(self.n)
+        v = np.empty(self.n)
+        q[self._jidx] = d.qpos[self._qadr]
+        v[self._jidx] = d.qvel[self._dadr]
+        q[self._tidx] = d.ten_length[self._tids]
+        v[self._tidx] = d.ten_velocity[self._tids]
+        return JointState(float(d.time), q, v, d.actuator_force[self._act].copy())
+
+    # ------------------------------------------------------------------ commands
+    def command(self, names: Sequence[str], efforts: Sequence[float]) -> np.ndarray:
+        """Set the torque [N m] of the named joints (module doc). Raises
+        :class:`InvalidInput` / :class:`UnknownName` and changes nothing on a bad command.
+        Returns the saturated torques (len(names),)."""
+        names = list(names)
+        tau = np.asarray(efforts, dtype=float).reshape(-1)
+        if len(names) != tau.size:
+            raise InvalidInput(f"effort command: {len(names)} names but {tau.size} efforts")
+        if len(set(names)) != len(names):
+            raise InvalidInput(f"effort command: duplicate joint names {names}")
+        if not np.all(np.isfinite(tau)):
+            bad = [n for n, t in zip(names, tau) if not np.isfinite(t)]
+            raise InvalidInput(f"effort command: NaN or infinite effort for {bad}")
+        return self.command_indices(self.indices(names), tau)
+
+    def command_indices(self, idx: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """:meth:`command` by positions in ``joint_names`` (already validated: unique valid
+        indices, finite ``tau`` of the same length). Returns the saturated torques."""
+        sat = np.clip(tau, -self.torque_limits[idx], self.torque_limits[idx])
+        self._tau_cmd[idx] = sat
+        self.data.ctrl[self._act[idx]] = sat
+        if not self._commanded[idx].all():
+            self._commanded[idx] = True
+            self._set_held()
+        return sat
+
+    def command_all(self, tau: np.ndarray) -> np.ndarray:
+        """Set all torques (n,) [N m] in ``joint_names`` order (fast path, saturated)."""
+        tau = np.asarray(tau, dtype=float)
+        if tau.shape != (self.n,):
+            raise InvalidInput(f"tau: expected shape ({self.n},), got {tau.shape}")
+        if not np.all(np.isfinite(tau)):
+            raise InvalidInput("tau: contains NaN or infinite values")
+        np.clip(tau, -self.torque_limits, self.torque_limits, out=self._tau_cmd)
+        self.data.ctrl[self._act] = self._tau_cmd
+        if not self._commanded.all():
+            self._commanded[:] = True
+            self._set_held()
+        return self._tau_cmd.copy()
+
+    @property
+    def commanded(self) -> np.ndarray:
+        """(n,) bool: joints under commanded torque (the others are held)."""
+        return self._commanded.copy()
+
+    def _set_held(self) -> None:
+        """Make held joints' actuators an affine PD (force = kp ctrl - kp q - kd qdot, with
+        ctrl = q_hold + gravity / kp set every step) and commanded ones pure motors."""
+        m = self.model
+        for i in range(self.n):
+            a = self._act[i]
+            m.actuator_gainprm[a, 0] = 1.0 if self._commanded[i] else self._kp[i]
+            m.actuator_biasprm[a, :3] = 0.0 if self._commanded[i] else (
+                0.0, -self._kp[i], -self._kd[i])
+            m.actuator_biastype[a] = (mujoco.mjtBias.mjBIAS_NONE if self._commanded[i]
+                                      else mujoco.mjtBias.mjBIAS_AFFINE)
+        held = np.flatnonzero(~self._commanded)
+        grav = held[self._dof_of[held] >= 0]  # tendons (eye pans) get no gravity term
+        self._held_act = self._act[held]
+        self._held_base = self._q_hold[held]
+        self._grav_act = self._act[grav]
+        self._grav_dof = self._dof_of[grav]
+        self._grav_kp = self._kp[grav]
+        self.data.ctrl[self._act[self._commanded]] = self._tau_cmd[self._commanded]
+
+    def _update_hold(self) -> None:
+        d = self.data
+        if self._held_act.size:
+            d.ctrl[self._held_act] = self._held_base
+            d.ctrl[self._grav_act] += d.qfrc_bias[self._grav_dof] / self._grav_kp
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` physics steps with the current commands and applied wrenches."""
+        m, d = self.model, self.data
+        for _ in range(n):
+            self._update_hold()
+            if self._applied or self._xfrc_dirty:
+                self._update_applied()
+            mujoco.mj_step(m, d)
+            self.steps += 1
+
+    def _update_applied(self) -> None:
+        d = self.data
+        d.xfrc_applied[:] = 0.0
+        self._xfrc_dirty = bool(self._applied)
+        if not self._applied:
+            return
+        t = d.time
+        self._applied = [a for a in self._applied if a.until > t]
+        for a in self._applied:
+            p = d.xpos[a.body] + d.xmat[a.body].reshape(3, 3) @ a.point_body
+            d.xfrc_applied[a.body, :3] += a.force
+            d.xfrc_applied[a.body, 3:] += a.torque + np.cross(p - d.xipos[a.body], a.force)
+
+    # ------------------------------------------------------------------ sensors
+    def ft(self, name: str) -> Wrench:
+        """FT sensor ``name`` (``FT_SENSORS``) in its frame, child_to_parent (module doc)."""
+        if name not in self._ft_adr:
+            raise UnknownName("FT sensor", name, FT_SENSORS)
+        fa, ta = self._ft_adr[name]
+        s = self.data.sensordata
+        # MuJoCo's force/torque sensors give the wrench the parent exerts on the child's
+        # subtree; the URDF sensors measure child_to_parent: the opposite.
+        return Wrench(-s[fa:fa + 3].copy(), -s[ta:ta + 3].copy())
+
+    def ft_all(self) -> np.ndarray:
+        """All FT sensors as (4, 6) [N, N m] rows (force, torque), ``FT_SENSORS`` order."""
+        s = self.data.sensordata
+        return -np.array([np.concatenate((s[fa:fa + 3], s[ta:ta + 3]))
+                          for fa, ta in self._ft_adr.values()])
+
+    def imu(self) -> ImuReading:
+        """Head IMU (module doc)."""
+        s, a = self.data.sensordata, self._imu_adr
+        return ImuReading(s[a["orientation"]:a["orientation"] + 4].copy(),
+                          s[a["gyro"]:a["gyro"] + 3].copy(),
+                          s[a["accelerometer"]:a["accelerometer"] + 3].copy())
+
+    def contact_wrench(self, hand: str) -> Wrench:
+        """Ground-truth total external wrench on ``hand``'s body (contacts + applied), in
+        root_link, moment about the hand frame origin."""
+        if hand not in self._hand_body:
+            raise UnknownName("hand", hand, _HANDS)
+        d, m = self.data, self.model
+        b = self._hand_body[hand]
+        # cfrc_ext: (torque, force) about subtree_com of the tree's root body, world axes
+        c = d.subtree_com[m.body_rootid[b]]
+        tau_c, f = d.cfrc_ext[b, :3], d.cfrc_ext[b, 3:]
+        p = d.site_xpos[self._hand_site[hand]]
+        return Wrench(f.copy(), tau_c + np.cross(c - p, f))
+
+    def frame_pose(self, name: str) -> Pose:
+        """Pose of a site (URDF frame) or body ``name`` in root_link."""
+        d, m = self.data, self.model
+        sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, name)
+        if sid >= 0:
+            q = np.zeros(4)
+            mujoco.mju_mat2Quat(q, d.site_xmat[sid])
+            return Pose(d.site_xpos[sid].copy(), q)
+        bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
+        if bid < 0:
+            raise UnknownName("frame", name, self.frame_names())
+        return Pose(d.xpos[bid].copy(), d.xquat[bid].copy())
+
+    def frame_names(self) -> list[str]:
+        """Every site (URDF frame) and body name."""
+        m = self.model
+        return [m.site(i).name for i in range(m.nsite)] + [m.body(i).name
+                                                             for i in range(1, m.nbody)]
+
+    # ------------------------------------------------------------------ scene
+    @property
+    def object_names(self) -> tuple[str, ...]:
+        """Movable objects on the table."""
+        return tuple(self._objects)
+
+    def object_pose(self, name: str) -> Pose:
+        """Pose of object ``name`` in root_link."""
+        if name not in self._objects:
+            raise UnknownName("object", name, self._objects)
+        b = self._objects[name][0]
+        return Pose(self.data.xpos[b].copy(), self.data.xquat[b].copy())
+
+    def set_object_pose(self, name: str, position: Sequence[float],
+                        quaternion: Sequence[float] = (1.0, 0.0, 0.0, 0.0)) -> None:
+        """Teleport object ``name`` to ``position`` [m], ``quaternion`` (w, x, y, z), at rest."""
+        if name not in self._objects:
+            raise UnknownName("object", name, self._objects)
+        p = np.asarray(position, dtype=float).reshape(-1)
+        q = np.asarray(quaternion, dtype=float).reshape(-1)
+        if p.size != 3 or q.size != 4 or not (np.all(np.isfinite(p)) and np.all(np.isfinite(q))):
+            raise InvalidInput(f"object pose: need finite position (3,) and quaternion (4,), "
+                               f"got {p.tolist()}, {q.tolist()}")
+        nq = np.linalg.norm(q)
+        if nq < 1e-9:
+            raise InvalidInput(f"object pose: quaternion {q.tolist()} has zero norm")
+        _, qa, da = self._objects[name]
+        self.data.qpos[qa:qa + 3] = p
+        self.data.qpos[qa + 3:qa + 7] = q / nq
+        self.data.qvel[da:da + 6] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+
+    def apply_wrench(self, target: str, force: Sequence[float], torque: Sequence[float],
+                     duration: float) -> None:
+        """Apply ``force`` [N] and ``torque`` [N m] (root_link axes) at the origin of a frame
+        (site) or at a body's origin, for ``duration`` [s] of simulated time."""
+        f = np.asarray(force, dtype=float).reshape(-1)
+        tq = np.asarray(torque, dtype=float).reshape(-1)
+        if f.size != 3 or tq.size != 3 or not (np.all(np.isfinite(f)) and
+                                               np.all(np.isfinite(tq))):
+            raise InvalidInput(f"apply_wrench: need finite force (3,) and torque (3,), got "
+                               f"{f.tolist()}, {tq.tolist()}")
+        if not np.isfinite(duration) or duration <= 0.0:
+            raise InvalidInput(f"apply_wrench: duration must be > 0 s, got {duration}")
+        m, d = self.model, self.data
+        sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, target)
+        if sid >= 0:
+            body = int(m.site_bodyid[sid])
+            R = d.xmat[body].reshape(3, 3)
+            point = R.T @ (d.site_xpos[sid] - d.xpos[body])
+        else:
+            body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, target)
+            if body <= 0:
+                raise UnknownName("frame or body", target, self.frame_names())
+            point = np.zeros(3)
+        self._applied.append(_AppliedWrench(body, point, f, tq, d.time + duration))
+
+    def clear_applied_wrenches(self) -> None:
+        """Remove every scripted wrench."""
+        self._applied.clear()
