@@ -59,6 +59,14 @@ class ForceField:
         self._k.setflags(write=False)
         self._k_total.setflags(write=False)
 
+    def retarget(self, target) -> "ForceField":
+        """The same field (stiffness, curl) centred on another ``target`` (3,) [m]."""
+        field = object.__new__(ForceField)
+        field.__dict__.update(self.__dict__)
+        field.target = _vector3("target", target)
+        field.target.setflags(write=False)
+        return field
+
     @property
     def stiffness_matrix(self) -> np.ndarray:
         """K_ext (3, 3) [N/m] (symmetric part, without the rotational component)."""

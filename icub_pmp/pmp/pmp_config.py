@@ -48,7 +48,7 @@ class PmpConfig(ConfigBase):
     max_step: float = 1000.0  # largest step [s units]
     max_steps: int = 200  # per relaxation
     stall_steps: int = 15  # steps without 1% improvement = equilibrium
-    convergence_tolerance: float = 2.0e-5  # stop when every hand is this close [m]
+    convergence_tolerance: float = 1.0e-4  # stop when every hand is this close [m]
     rotation_tolerance: float = 1.0e-4  # and orientation this close [rad]
     boundary_fraction: float = 0.99  # max fraction of the distance to a limit per step
     # success (mental simulation verdict)
@@ -58,6 +58,7 @@ class PmpConfig(ConfigBase):
     # posture memory fallback (Sect. 4)
     posture_memory_size: int = 20000  # babbled postures (0 = no fallback)
     posture_memory_seed: int = 0
+    posture_memory_attempts: int = 3  # nearest postures tried, one relaxation each
     posture_field_gain: float = 300.0  # pull toward the recalled posture [N m/rad]
     posture_field_decay: float = 2.0  # its fading constant [s units]
     # torque-limit settling (Sect. 2.3)
@@ -100,7 +101,7 @@ class PmpConfig(ConfigBase):
             raise ConfigError("PmpConfig.arm_admittance: at least one arm joint must move")
         if self.step_growth < 1.0 or self.max_step < self.initial_step:
             raise ConfigError("PmpConfig: need step_growth >= 1 and max_step >= initial_step")
-        for name in ("max_steps", "stall_steps", "settle_max_steps"):
+        for name in ("max_steps", "stall_steps", "settle_max_steps", "posture_memory_attempts"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"PmpConfig.{name}: expected >= 1")
         if self.posture_memory_size < 0:

@@ -10,8 +10,9 @@ Steps of :meth:`PmpPlanner.plan`:
 
 1. relax from the start posture;
 2. if the hands stay further from the targets than the success tolerance, recall from the
-   posture memory the babbled posture whose hands came nearest, relax again from the start
-   with a fading field toward it and keep the better of the two (:mod:`posture_memory`);
+   posture memory the babbled postures whose hands came nearest and, nearest first, relax
+   again from the start with a fading field toward each until one succeeds (at most
+   ``posture_memory_attempts``); keep the best relaxation (:mod:`posture_memory`);
 3. with target forces, continue the relaxation with the torque-limit field of Sect. 2.3
    (null-space settling);
 4. sample the path at the TBG's times, compute the predicted hand paths and the residuals.
@@ -67,12 +68,17 @@ class PmpPlanner:
             provider = PinocchioJacobianProvider()
         self.provider = provider
         self._names = provider.joint_names
+        self._index = {n: i for i, n in enumerate(self._names)}
         for j in self.spec.torso_joints + self.spec.left_arm_joints + self.spec.right_arm_joints:
             if j not in self._names:
                 raise UnknownName("joint of the body model", j, self._names)
         self._range = provider.upper - provider.lower
         self._ref_range = float(np.mean(self._range))
         self._memories: dict[tuple, PostureMemory] = {}
+        self._branch_cache: dict[tuple, BranchNetwork] = {}
+        self._limit_cache: dict[tuple, JointLimitField] = {}
+        c = self.config
+        self._field = ForceField(np.zeros(3), np.array(c.stiffness), c.curl, c.curl_axis)
         self._relax = Relaxation(self._settings(self.config.max_steps))
         self._settle = Relaxation(self._settings(self.config.settle_max_steps, normalise=False))
 
@@ -117,6 +123,46 @@ class PmpPlanner:
         for j in tuple(goal.frozen_joints) + tuple(goal.joint_limits):
             if j not in self._names:
                 raise UnknownName("joint", j, self._names)
+        branches = self._branches(goal)
+        key = (branches.joint_names, tuple(sorted(goal.joint_limits.items())))
+        limits = self._limit_cache.get(key)
+        if limits is None:
+            idx = [self._names.index(j) for j in branches.joint_names]
+            lower = self.provider.lower[idx].copy()
+            upper = self.provider.upper[idx].copy()
+            for j, (lo, hi) in goal.joint_limits.items():
+                if j in branches.joint_names:
+                    k = branches.joint_names.index(j)
+                    lower[k], upper[k] = lo, hi
+            limits = JointLimitField(lower, upper, c.joint_limit_alpha)
+            if len(self._limit_cache) > 64:
+                self._limit_cache.clear()
+            self._limit_cache[key] = limits
+        lower, upper = limits.lower, limits.upper
+        idx = [self._index[j] for j in branches.joint_names]
+        qs = q_start[idx]
+        tol = c.start_tolerance
+        outside = (qs < lower - tol) | (qs > upper + tol)
+        if np.any(outside):
+            bad = [f"{branches.joint_names[i]}={qs[i]:.3f} not in [{lower[i]:.3f}, {upper[i]:.3f}]"
+                   for i in np.flatnonzero(outside)]
+            raise InvalidInput(f"start posture outside the joint limits: {', '.join(bad)}")
+        targets = {h: self._field.retarget(p) for h, p in goal.targets.items()}
+        orientations = {
+            h: OrientationField(r, c.rotation_stiffness) for h, r in goal.orientations.items()
+        }
+        return PmpNetwork(
+            self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
+            targets, orientations, goal.obstacles, limits, goal.held_object, posture,
+        )
+
+    def _branches(self, goal: ReachGoal) -> BranchNetwork:
+        """The branching network of the goal's hands, trunk and admittance modulation."""
+        key = (goal.hands, goal.use_torso, goal.trunk_admittance_scale, goal.frozen_joints)
+        branches = self._branch_cache.get(key)
+        if branches is not None:
+            return branches
+        c = self.config
         trunk = self.spec.torso_joints if goal.use_torso else ()
         arms = {h: self.spec.arm_joints(h) for h in goal.hands}
         trunk_a = np.array(c.trunk_admittance)[: len(trunk)] * goal.trunk_admittance_scale
@@ -131,36 +177,13 @@ class PmpPlanner:
             for i, j in enumerate(branches.joint_names):
                 if j in frozen:
                     a[i] = 0.0
-            nt = len(trunk)
             branches = branches.with_admittance(
-                a[:nt], {h: a[branches.branch_slices[h]] for h in goal.hands}
+                a[: len(trunk)], {h: a[branches.branch_slices[h]] for h in goal.hands}
             )
-        idx = [self._names.index(j) for j in branches.joint_names]
-        lower = self.provider.lower[idx].copy()
-        upper = self.provider.upper[idx].copy()
-        for j, (lo, hi) in goal.joint_limits.items():
-            if j in branches.joint_names:
-                k = branches.joint_names.index(j)
-                lower[k], upper[k] = lo, hi
-        qs = q_start[idx]
-        tol = c.start_tolerance
-        outside = (qs < lower - tol) | (qs > upper + tol)
-        if np.any(outside):
-            bad = [f"{branches.joint_names[i]}={qs[i]:.3f} not in [{lower[i]:.3f}, {upper[i]:.3f}]"
-                   for i in np.flatnonzero(outside)]
-            raise InvalidInput(f"start posture outside the joint limits: {', '.join(bad)}")
-        limits = JointLimitField(lower, upper, c.joint_limit_alpha)
-        targets = {
-            h: ForceField(p, np.array(c.stiffness), c.curl, c.curl_axis)
-            for h, p in goal.targets.items()
-        }
-        orientations = {
-            h: OrientationField(r, c.rotation_stiffness) for h, r in goal.orientations.items()
-        }
-        return PmpNetwork(
-            self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
-            targets, orientations, goal.obstacles, limits, goal.held_object, posture,
-        )
+        if len(self._branch_cache) > 64:
+            self._branch_cache.clear()
+        self._branch_cache[key] = branches
+        return branches
 
     def _range_factor(self, joints) -> np.ndarray:
         idx = [self._names.index(j) for j in joints]
@@ -178,14 +201,17 @@ class PmpPlanner:
         trace = self._relax.run(net)
         attempts, used_memory = 1, False
         if not self._reached(trace) and c.posture_memory_size > 0:
-            recall = self._memory(net).recall(
-                np.array([net.final_target(h) for h in net.hands])
+            recalls = self._memory(net).recall(
+                np.array([net.final_target(h) for h in net.hands]), c.posture_memory_attempts
             )
-            field = PostureField(recall.q, c.posture_field_gain, c.posture_field_decay)
-            trace2 = self._relax.run(self.build_network(goal, q0, posture=field))
-            attempts = 2
-            if self._score(trace2) < self._score(trace):
-                trace, used_memory = trace2, True
+            for recall in recalls:
+                field = PostureField(recall.q, c.posture_field_gain, c.posture_field_decay)
+                trace2 = self._relax.run(self.build_network(goal, q0, posture=field))
+                attempts += 1
+                if self._score(trace2) < self._score(trace):
+                    trace, used_memory = trace2, True
+                if self._reached(trace):
+                    break
         null_space = np.zeros(trace.steps, dtype=bool)
         torque_field = None
         if goal.target_forces:
@@ -286,12 +312,16 @@ class PmpPlanner:
         )
         times = tbg.sample_times(c.sample_period)
         k, phi = timing.locate(times, s_nodes, progress)
-        z = timing.interpolate(z_nodes, k, phi)
+        axis = s_nodes if timing.mode == "gamma" else progress
+        z = timing.interpolate_smooth(z_nodes, axis, k, phi)
+        # no overshoot beyond what the relaxation visited (its nodes are strictly inside the
+        # joint limits, so the sampled trajectory is too)
+        z = np.minimum(np.maximum(z, z_nodes.min(axis=0)), z_nodes.max(axis=0))
+        z[0] = z_nodes[0]
         z[-1] = z_nodes[-1]
         joints = z[:, : net.n]
-        vel = np.gradient(joints, times, axis=0)
-        vel[0] = 0.0
-        vel[-1] = 0.0
+        vel = np.zeros_like(joints)  # central differences, zero at both ends
+        vel[1:-1] = (joints[2:] - joints[:-2]) / (times[2:] - times[:-2])[:, None]
         q_full = np.repeat(net.q_full(z_nodes[0])[None, :], len(times), axis=0)
         q_full[:, net.joint_index] = joints
         q_final = q_full[-1].copy()

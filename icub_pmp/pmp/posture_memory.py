@@ -66,8 +66,12 @@ class PostureMemory:
     def __len__(self) -> int:
         return len(self.postures)
 
-    def recall(self, targets: np.ndarray) -> Recall:
-        """The posture whose hands were nearest ``targets`` (k, 3) [m]."""
+    def recall(self, targets: np.ndarray, count: int = 1) -> list[Recall]:
+        """The ``count`` postures whose hands were nearest ``targets`` (k, 3) [m], nearest
+        first."""
         t = np.asarray(targets, dtype=float).reshape(-1)
-        dist, i = self._tree.query(t)
-        return Recall(self.postures[i].copy(), float(dist), self.hand_positions[i].copy())
+        count = max(1, min(int(count), len(self)))
+        dist, idx = self._tree.query(t, k=count)
+        dist, idx = np.atleast_1d(dist), np.atleast_1d(idx)
+        return [Recall(self.postures[i].copy(), float(d), self.hand_positions[i].copy())
+                for d, i in zip(dist, idx)]

@@ -36,7 +36,7 @@ class ReachPlan:
         trace: the relaxation nodes (relaxation time s, states, hand positions).
         object_path: (N, 3) held-object path [m], or None.
         torque_ratio: max |tau_i| / tau_max_i at tau after settling (None without forces).
-        attempts: relaxations run (2 when the posture memory was used).
+        attempts: relaxations run (1 + those guided by remembered postures).
         used_memory: whether the posture-memory relaxation gave the returned plan.
     """
 

@@ -139,10 +139,11 @@ class Relaxation:
         cfg = self.settings
         z = network.initial_state() if z0 is None else np.array(z0, dtype=float)
         n = network.n
-        lo, hi = network.lower, network.upper
-        # start strictly inside the limits (eq 6 is infinite on them)
-        margin = 1e-9 * (hi - lo)
-        z[:n] = np.clip(z[:n], lo + margin, hi - margin)
+        # joints stay at least 1e-9 of their range inside the limits (eq 6 is infinite on
+        # them): the start is clamped there and every step keeps that margin
+        margin = 1e-9 * (network.upper - network.lower)
+        lo, hi = network.lower + margin, network.upper - margin
+        z[:n] = np.minimum(np.maximum(z[:n], lo), hi)
         state = network.evaluate(z, 0.0)
         if cfg.balance_hands and network.held_object is None and len(network.hands) > 1:
             network.balance_hands(state)

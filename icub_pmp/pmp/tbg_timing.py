@@ -119,3 +119,26 @@ class TbgTiming:
         """Piecewise-linear node values (N, ...) at (k, phi) -> (M, ...)."""
         shape = (-1,) + (1,) * (values.ndim - 1)
         return values[k] + phi.reshape(shape) * (values[k + 1] - values[k])
+
+    @staticmethod
+    def interpolate_smooth(
+        values: np.ndarray, axis: np.ndarray, k: np.ndarray, phi: np.ndarray
+    ) -> np.ndarray:
+        """C1 cubic Hermite interpolation of node values (N, d) over the node parameter
+        ``axis`` (N,) (progress or s) at (k, phi) -> (M, d); tangents by central differences
+        in ``axis`` (Catmull-Rom on a non-uniform grid), zero across empty segments. Smooth
+        speeds where the piecewise-linear path has corners at the nodes."""
+        n = len(axis)
+        if n < 3:
+            return TbgTiming.interpolate(values, k, phi)
+        idx_prev = np.maximum(np.arange(n) - 1, 0)
+        idx_next = np.minimum(np.arange(n) + 1, n - 1)
+        span = axis[idx_next] - axis[idx_prev]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tang = np.where(span[:, None] > 0,
+                            (values[idx_next] - values[idx_prev]) / span[:, None], 0.0)
+        h = (axis[k + 1] - axis[k])[:, None]
+        f = phi[:, None]
+        f2, f3 = f * f, f * f * f
+        return ((2 * f3 - 3 * f2 + 1) * values[k] + (f3 - 2 * f2 + f) * h * tang[k]
+                + (-2 * f3 + 3 * f2) * values[k + 1] + (f3 - f2) * h * tang[k + 1])

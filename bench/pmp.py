@@ -1,0 +1,260 @@
+"""Benchmark of the PMP planner (issue 4) against a damped-least-squares baseline.
+
+    scripts/env.sh python bench/pmp.py --quick          # 200 targets, < 2 min
+    scripts/env.sh python bench/pmp.py                  # 1000 targets
+    scripts/env.sh python bench/pmp.py --quick --plot   # + Fig 4/9 and Fig 7 PNGs in bench/out/
+
+Targets: a fixed set (seed) of random reachable bimanual targets for the 17-DoF left arm -
+torso - right arm chain: both hand positions are those of one configuration drawn uniformly
+within the URDF joint limits (so a solution exists). Every plan starts from the rest posture,
+tau = 2 s, default config/pmp_planner.yaml gains. Success = both hands within 1 mm of their
+targets at t = tau, checked by an independent forward kinematics of the plan's last sample.
+Plan time = wall time of ``PmpPlanner.plan`` (CPU time of the thread also reported: on a
+loaded machine it stays near the unloaded wall time) (relaxation, posture-memory fallback when used,
+TBG sampling of the trajectory, residuals); the posture memory is built once before timing
+(reported as memory_build_s) and the predicted hand paths (computed on demand, for the node's
+nav_msgs/Path) are timed separately. The same targets go to DLS (icub_pmp.pmp.DlsSolver, same
+joints, limits and start). Ends with one JSON line. Timings depend on the machine's load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from icub_pmp.pmp import (  # noqa: E402
+    DlsSolver,
+    PmpPlanner,
+    ReachGoal,
+    TimeBaseGenerator,
+)
+
+OUT = Path(__file__).resolve().parent / "out"
+SUCCESS = 1e-3  # [m]
+TAU = 2.0  # [s]
+
+
+def make_targets(planner: PmpPlanner, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(targets (n, 2, 3) [m], the configurations (n, nq) that reach them)."""
+    prov, spec = planner.provider, planner.spec
+    joints = spec.torso_joints + spec.left_arm_joints + spec.right_arm_joints
+    idx = [prov.joint_names.index(j) for j in joints]
+    frames = [spec.hand_frame("left"), spec.hand_frame("right")]
+    rng = np.random.default_rng(seed)
+    rest = planner.start_configuration(None)
+    qs = np.repeat(rest[None], n, axis=0)
+    qs[:, idx] = rng.uniform(prov.lower[idx], prov.upper[idx], size=(n, len(idx)))
+    return np.array([prov.positions(q, frames) for q in qs]), qs
+
+
+def run_pmp(planner: PmpPlanner, targets: np.ndarray) -> dict:
+    prov, spec = planner.provider, planner.spec
+    frames = [spec.hand_frame("left"), spec.hand_frame("right")]
+    rest = planner.start_configuration(None)
+    times, cpu, paths_times, residuals, steps, fallback = [], [], [], [], [], 0
+    for x in targets:
+        goal = ReachGoal(targets={"left": x[0], "right": x[1]}, tau=TAU)
+        c0 = time.thread_time()
+        t0 = time.perf_counter()
+        plan = planner.plan(goal, rest)
+        t1 = time.perf_counter()
+        cpu.append(time.thread_time() - c0)
+        _ = plan.hand_paths
+        t2 = time.perf_counter()
+        final = prov.positions(plan.q_final, frames)  # independent check of the verdict
+        residuals.append(float(np.linalg.norm(final - x, axis=1).max()))
+        times.append(t1 - t0)
+        paths_times.append(t2 - t0)
+        steps.append(plan.trace.steps)
+        fallback += plan.attempts > 1
+    return {
+        "times": np.array(times) * 1e3,
+        "cpu": np.array(cpu) * 1e3,
+        "paths_times": np.array(paths_times) * 1e3,
+        "residuals": np.array(residuals),
+        "steps": np.array(steps),
+        "fallback": fallback,
+    }
+
+
+def run_dls(planner: PmpPlanner, targets: np.ndarray) -> dict:
+    spec = planner.spec
+    joints = spec.torso_joints + spec.left_arm_joints + spec.right_arm_joints
+    dls = DlsSolver(planner.provider, joints, [spec.hand_frame("left"), spec.hand_frame("right")])
+    rest = planner.start_configuration(None)
+    times, cpu, residuals, iters = [], [], [], []
+    for x in targets:
+        c0 = time.thread_time()
+        t0 = time.perf_counter()
+        sol = dls.solve(rest, x)
+        times.append(time.perf_counter() - t0)
+        cpu.append(time.thread_time() - c0)
+        residuals.append(float(sol.residuals.max()))
+        iters.append(sol.iterations)
+    return {"times": np.array(times) * 1e3, "cpu": np.array(cpu) * 1e3,
+            "residuals": np.array(residuals),
+            "iterations": np.array(iters)}
+
+
+# ---------------------------------------------------------------------------- plots
+def plot_fig4_fig9(planner: PmpPlanner, targets: np.ndarray) -> list[str]:
+    """Fig 4 / Fig 9 equivalents: joint and hand trajectories, speed profile, xi and Gamma."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rest = planner.start_configuration(None)
+    x = targets[0]
+    plan = planner.plan(ReachGoal(targets={"left": x[0], "right": x[1]}, tau=TAU), rest)
+    tbg = TimeBaseGenerator(TAU)
+    t = np.linspace(0, TAU, 400)
+    fig, ax = plt.subplots(2, 2, figsize=(11, 7.5))
+    for j, name in enumerate(plan.joint_names):
+        ax[0, 0].plot(plan.t, plan.positions[:, j], lw=1, label=name)
+    ax[0, 0].set(title="joint trajectories q(t) (17-DoF network)", xlabel="t [s]",
+                 ylabel="[rad]")
+    ax[0, 0].legend(fontsize=5, ncol=3)
+    for h, c in (("left", "tab:blue"), ("right", "tab:red")):
+        p = plan.hand_paths[h]
+        for k, ls in zip(range(3), ("-", "--", ":")):
+            ax[0, 1].plot(plan.t, p[:, k], ls, color=c, label=f"{h} {'xyz'[k]}")
+        ax[1, 0].plot(plan.t, plan.hand_speed(h), color=c, label=f"{h} hand")
+    ax[0, 1].set(title="hand trajectories x(t), root_link", xlabel="t [s]", ylabel="[m]")
+    ax[0, 1].legend(fontsize=6, ncol=2)
+    ax[1, 0].set(title="hand speed (bell-shaped, Appendix A)", xlabel="t [s]", ylabel="[m/s]")
+    ax[1, 0].legend()
+    ax[1, 1].plot(t, tbg.xi(t), label="xi(t) (min-jerk TBG, eq 7)")
+    ax2 = ax[1, 1].twinx()
+    ax2.plot(t[:-1], tbg.gamma(t[:-1]), color="tab:orange", label="Gamma(t)")
+    ax2.set_yscale("log")
+    ax2.set_ylabel("Gamma [1/s]")
+    ax[1, 1].set(title="TBG: xi(t) and Gamma(t) = xi_dot/(1 - xi)", xlabel="t [s]")
+    ax[1, 1].legend(loc="upper left")
+    ax2.legend(loc="center right")
+    fig.suptitle(f"PMP bimanual reach, tau = {TAU} s: {plan.message}", fontsize=8)
+    fig.tight_layout()
+    out = OUT / "pmp_fig4_fig9.png"
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return [str(out)]
+
+
+def plot_fig7(planner: PmpPlanner) -> list[str]:
+    """Fig 7 equivalent: trunk recruitment vs target distance, stiff vs compliant trunk."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    prov, spec = planner.provider, planner.spec
+    rest = planner.start_configuration(None)
+    frames = [spec.hand_frame("left"), spec.hand_frame("right")]
+    x0 = prov.positions(rest, frames)
+    torso = [prov.joint_names.index(j) for j in spec.torso_joints]
+    dists = np.linspace(0.0, 0.24, 13)
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    for scale, style in ((0.0, "k--"), (0.2, "b-"), (1.0, "g-"), (5.0, "r-")):
+        motion, res = [], []
+        for d in dists:
+            targets = {"left": x0[0] + [-d, 0, d], "right": x0[1] + [-d, 0, d]}
+            plan = planner.plan(ReachGoal(targets=targets, trunk_admittance_scale=scale), rest)
+            motion.append(np.degrees(np.linalg.norm(plan.q_final[torso] - rest[torso])))
+            res.append(plan.max_residual * 1e3)
+        label = "stiff trunk (A_trunk = 0)" if scale == 0 else f"A_trunk x {scale}"
+        ax[0].plot(dists * np.sqrt(2) * 100, motion, style, label=label)
+        ax[1].plot(dists * np.sqrt(2) * 100, res, style, label=label)
+    ax[0].set(title="trunk recruitment (Fig 7)", xlabel="target distance from rest hands [cm]",
+              ylabel="|trunk motion| [deg]")
+    ax[1].set(title="residual at tau (mental simulation)", xlabel="target distance [cm]",
+              ylabel="[mm]")
+    ax[1].set_yscale("symlog", linthresh=1.0)
+    for a in ax:
+        a.legend(fontsize=8)
+    fig.tight_layout()
+    out = OUT / "pmp_fig7_trunk.png"
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return [str(out)]
+
+
+# ---------------------------------------------------------------------------- main
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="200 targets (< 2 min)")
+    ap.add_argument("--n", type=int, default=None, help="number of targets")
+    ap.add_argument("--seed", type=int, default=2009)
+    ap.add_argument("--plot", action="store_true", help="write PNG figures to bench/out/")
+    args = ap.parse_args()
+    n = args.n or (200 if args.quick else 1000)
+    load = os.getloadavg()[0]
+
+    planner = PmpPlanner()
+    t0 = time.perf_counter()
+    planner.warm_up()
+    memory_s = time.perf_counter() - t0
+    targets, _ = make_targets(planner, n, args.seed)
+    rest = planner.start_configuration(None)
+    for x in targets[:5]:  # warm-up plans (imports, caches), not timed
+        planner.plan(ReachGoal(targets={"left": x[0], "right": x[1]}, tau=TAU), rest)
+
+    pmp = run_pmp(planner, targets)
+    dls = run_dls(planner, targets)
+
+    ok = pmp["residuals"] <= SUCCESS
+    dok = dls["residuals"] <= SUCCESS
+    r = {
+        "n_targets": n,
+        "seed": args.seed,
+        "tau_s": TAU,
+        "success_rate": float(ok.mean()),
+        "plan_ms_median": float(np.median(pmp["times"])),
+        "plan_ms_p95": float(np.percentile(pmp["times"], 95)),
+        "plan_ms_max": float(pmp["times"].max()),
+        "plan_cpu_ms_median": float(np.median(pmp["cpu"])),
+        "plan_cpu_ms_p95": float(np.percentile(pmp["cpu"], 95)),
+        "plan_with_paths_ms_median": float(np.median(pmp["paths_times"])),
+        "residual_mm_median": float(np.median(pmp["residuals"]) * 1e3),
+        "residual_mm_p95": float(np.percentile(pmp["residuals"], 95) * 1e3),
+        "relaxation_steps_median": float(np.median(pmp["steps"])),
+        "memory_fallback_plans": int(pmp["fallback"]),
+        "memory_build_s": memory_s,
+        "dls_success_rate": float(dok.mean()),
+        "dls_ms_median": float(np.median(dls["times"])),
+        "dls_ms_p95": float(np.percentile(dls["times"], 95)),
+        "dls_cpu_ms_median": float(np.median(dls["cpu"])),
+        "dls_residual_mm_median": float(np.median(dls["residuals"]) * 1e3),
+        "dls_iterations_median": float(np.median(dls["iterations"])),
+        "plan_to_dls_time_ratio": float(np.median(pmp["times"]) / np.median(dls["times"])),
+        "load_avg_1min": load,
+    }
+    print(f"PMP  success {r['success_rate']:.3f}  plan median {r['plan_ms_median']:.2f} ms  "
+          f"p95 {r['plan_ms_p95']:.2f} ms  residual median {r['residual_mm_median']:.4f} mm  "
+          f"p95 {r['residual_mm_p95']:.4f} mm  steps median {r['relaxation_steps_median']:.0f}  "
+          f"posture-memory fallback {r['memory_fallback_plans']}/{n}  (CPU time median "
+          f"{r['plan_cpu_ms_median']:.2f} ms, p95 {r['plan_cpu_ms_p95']:.2f} ms)")
+    print(f"DLS  success {r['dls_success_rate']:.3f}  median {r['dls_ms_median']:.2f} ms  "
+          f"p95 {r['dls_ms_p95']:.2f} ms  iterations median {r['dls_iterations_median']:.0f}")
+    failed = np.flatnonzero(~ok)
+    if failed.size:
+        print("PMP failures (target index: residual mm):",
+              ", ".join(f"{i}: {pmp['residuals'][i] * 1e3:.1f}" for i in failed[:20]))
+    if args.plot:
+        OUT.mkdir(parents=True, exist_ok=True)
+        files = plot_fig4_fig9(planner, targets) + plot_fig7(planner)
+        print("plots:", ", ".join(files))
+    print(json.dumps(r))
+
+
+if __name__ == "__main__":
+    main()
