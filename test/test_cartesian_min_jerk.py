@@ -20,6 +20,14 @@ from icub_pmp.kinematics import IcubModel
 CHAIN = "torso_right_arm"
 
 
+def _cfg(**kw) -> IkConfig:
+    """Test configuration: CasADi VM (no compile, fast start) and a wall-time bound loose
+    enough for a heavily loaded machine (these tests check answers, not speed)."""
+    kw.setdefault("codegen", False)
+    kw.setdefault("max_solve_time", 5.0)
+    return IkConfig(**kw)
+
+
 @pytest.fixture(scope="module")
 def model() -> IcubModel:
     return IcubModel()
@@ -70,7 +78,7 @@ def test_filter_rejects_bad_times():
 
 
 def _goal(model, chain, seed=0):
-    solver = IkSolver(model, IkConfig(codegen=False))
+    solver = IkSolver(model, _cfg())
     q0 = model.posture("rest")
     target = model.frame_position(q0, chain.frame) + np.array([0.08, -0.05, 0.10])
     sol = solver.solve(chain.name, target, None, q0)
@@ -117,7 +125,7 @@ def test_retarget_mid_motion_is_smooth(model, chain):
     """A new target at t = 0.8 s continues from the running state: velocity continuous at the
     switch (change no larger than elsewhere), and the motion ends at the new target."""
     q0, sol = _goal(model, chain)
-    solver = IkSolver(model, IkConfig(codegen=False))
+    solver = IkSolver(model, _cfg())
     gen = MinJerkGenerator(model, chain)
     gen.reset(q0)
     gen.set_target(sol.q)

@@ -23,6 +23,14 @@ from icub_pmp.kinematics import IcubModel
 CHAIN = "torso_right_arm"
 
 
+def _cfg(**kw) -> IkConfig:
+    """Test configuration: CasADi VM (no compile, fast start) and a wall-time bound loose
+    enough for a heavily loaded machine (these tests check answers, not speed)."""
+    kw.setdefault("codegen", False)
+    kw.setdefault("max_solve_time", 5.0)
+    return IkConfig(**kw)
+
+
 @pytest.fixture(scope="module")
 def model() -> IcubModel:
     return IcubModel()
@@ -31,7 +39,7 @@ def model() -> IcubModel:
 @pytest.fixture(scope="module")
 def solver(model) -> IkSolver:
     # the CasADi VM (no C compilation) keeps the suite fast; test_codegen_* covers gcc
-    return IkSolver(model, IkConfig(codegen=False))
+    return IkSolver(model, _cfg())
 
 
 def _targets(model, n, seed, hand="right", torso=True):
@@ -76,7 +84,7 @@ def test_reachable_poses_solved_within_epsilon_and_limits(model, solver):
 
 def test_orientation_error_decreases_with_its_weight(model, solver):
     """With a strong rest-posture pull, the orientation error shrinks as its weight grows."""
-    pulled = IkSolver(model, IkConfig(codegen=False, rest_weight=0.5,
+    pulled = IkSolver(model, _cfg(rest_weight=0.5,
                                       rest_joint_weights_arm=(1.0,) * 7))
     T = _targets(model, 1, seed=11)[0]
     errs = [pulled.solve(CHAIN, T.translation, T.rotation, orientation_weight=w).orientation_error
@@ -88,8 +96,8 @@ def test_orientation_error_decreases_with_its_weight(model, solver):
 def test_rest_posture_keeps_the_waist_upright(model):
     """When the arm alone can reach (targets made with the torso at 0), the rest-posture term
     with iKin's weights (torso 1, arm 0) keeps the torso upright; without it the torso moves."""
-    with_rest = IkSolver(model, IkConfig(codegen=False, rest_joint_weights_arm=(0.0,) * 7))
-    no_rest = IkSolver(model, IkConfig(codegen=False, rest_weight=0.0))
+    with_rest = IkSolver(model, _cfg(rest_joint_weights_arm=(0.0,) * 7))
+    no_rest = IkSolver(model, _cfg(rest_weight=0.0))
     worst_rest, worst_free = 0.0, 0.0
     for T in _targets(model, 4, seed=5, torso=False):
         a = with_rest.solve(CHAIN, T.translation, T.rotation)
@@ -131,7 +139,7 @@ def test_seven_dof_chain_holds_the_torso(model, solver):
 def test_shoulder_constraints_hold(model, solver):
     """Solutions meet the 7 shoulder/forearm constraints, although the same targets solved
     without them give violating solutions (so the constraints are active)."""
-    free = IkSolver(model, IkConfig(codegen=False, shoulder_constraints=False))
+    free = IkSolver(model, _cfg(shoulder_constraints=False))
     chain = KinematicChain.from_name(CHAIN)
     alc = ArmLinearConstraints("right")
     rng = np.random.default_rng(2)
@@ -196,7 +204,7 @@ def test_unreachable_target_reports_the_residual(solver):
 
 def test_solve_time_is_bounded(model):
     """With a tiny wall-time budget IPOPT stops early; the solver reports it, no exception."""
-    quick = IkSolver(model, IkConfig(codegen=False, max_solve_time=1e-4))
+    quick = IkSolver(model, _cfg(max_solve_time=1e-4))
     T = _targets(model, 1, seed=4)[0]
     sol = quick.solve(CHAIN, T.translation, T.rotation)
     assert sol.status == "Maximum_WallTime_Exceeded"
@@ -216,7 +224,7 @@ def test_epsilon_is_a_squared_distance(model, solver):
 
 def test_codegen_matches_the_casadi_vm(model, solver):
     """The gcc-compiled NLP gives the same solution as CasADi's virtual machine."""
-    compiled = IkSolver(model, IkConfig(codegen=True))
+    compiled = IkSolver(model, _cfg(codegen=True))
     assert compiled.problem(CHAIN).compiled
     T = _targets(model, 1, seed=6)[0]
     a = compiled.solve(CHAIN, T.translation, T.rotation)
@@ -226,11 +234,11 @@ def test_codegen_matches_the_casadi_vm(model, solver):
 
 def test_reconfigure_keeps_problems_unless_needed(model):
     """Changing epsilon or weights keeps the built NLP; changing IPOPT settings rebuilds it."""
-    s = IkSolver(model, IkConfig(codegen=False))
+    s = IkSolver(model, _cfg())
     p = s.problem("right_arm")
-    s.reconfigure(IkConfig(codegen=False, epsilon=1e-6, orientation_weight=2.0))
+    s.reconfigure(_cfg(epsilon=1e-6, orientation_weight=2.0))
     assert s.problem("right_arm") is p
-    s.reconfigure(IkConfig(codegen=False, epsilon=1e-6, max_iter=50))
+    s.reconfigure(_cfg(epsilon=1e-6, max_iter=50))
     assert s.problem("right_arm") is not p
 
 
@@ -294,16 +302,16 @@ def test_additional_nonlinear_constraint(model):
         return R[2, 0]
 
     target = np.array([-0.25, 0.20, 0.05])
-    plain = IkSolver(model, IkConfig(codegen=False)).solve(CHAIN, target)
+    plain = IkSolver(model, _cfg()).solve(CHAIN, target)
     assert plain.success and plain.rotation[2, 0] > -0.9
     c = NlpConstraint("x_axis_down", x_axis_down, [-np.inf], [-0.9])
-    solver = IkSolver(model, IkConfig(codegen=False), constraints={CHAIN: [c]})
+    solver = IkSolver(model, _cfg(), constraints={CHAIN: [c]})
     sol = solver.solve(CHAIN, target)
     assert sol.success, sol.message
     assert sol.rotation[2, 0] <= -0.9 + 1e-6
     assert sol.constraint_violation <= 1e-6
     bad = NlpConstraint("two_rows", lambda q, k: ca.vertcat(q[0], q[1]), [0.0], [1.0])
     with pytest.raises(InvalidInput, match="two_rows"):
-        IkSolver(model, IkConfig(codegen=False), constraints={CHAIN: [bad]}).problem(CHAIN)
+        IkSolver(model, _cfg(), constraints={CHAIN: [bad]}).problem(CHAIN)
     with pytest.raises(UnknownName):
-        IkSolver(model, constraints={"tail": [c]})
+        IkSolver(model, _cfg(), constraints={"tail": [c]})
