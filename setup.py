@@ -9,11 +9,13 @@ PACKAGE = "icub_pmp"
 # One entry per node executable (`ros2 run icub_pmp <name>`); module path = icub_pmp.nodes.<name>.
 NODES = [
     "cartesian_solver",
+    "impedance_controller",
     "motion_segmenter",
     "pmp_planner",
     "posture_publisher",
     "robot_state_publisher",
     "sim_bridge",
+    "wrench_estimator",
 ]
 
 setup(

@@ -112,6 +112,18 @@ class WrenchEstimator:
         self._last_contact = {h: False for h in HANDS}
 
     # ------------------------------------------------------------------ helpers
+    def apply_live_config(self, config: WrenchEstimatorConfig) -> None:
+        """Apply the settings that need no rebuild: RFRR on/off, learning on/off, contact
+        thresholds (flags restart clear). Other fields of ``config`` must be unchanged."""
+        self.rfrr_enabled = config.rfrr_enabled
+        self.rfrr_learning = config.rfrr_learning
+        self._contact = {
+            h: ContactDetector(config.contact_force_on, config.contact_force_off,
+                               config.contact_min_samples)
+            for h in HANDS
+        }
+        self.config = config
+
     def reset(self) -> None:
         """Forget filter states, contact flags and the offset calibration (not the RFRR)."""
         self._filter.reset()

@@ -47,6 +47,7 @@ class WrenchEstimatorConfig(ConfigBase):
     mismatch_scale: float = 1.0  # the scale factor (a deliberate model mismatch)
     require_same_stamp: bool = True  # node: joint states and FT must carry the same stamp
     stale_timeout: float = 0.1  # node: FT older than this (vs joint states) is stale [s]
+    publish_every: int = 1  # node: wrench/contact/predicted-FT topics every N samples
 
     def validate(self) -> None:
         """Check ranges and choices (raises :class:`ConfigError` naming the field)."""
@@ -68,7 +69,8 @@ class WrenchEstimatorConfig(ConfigBase):
                 "need 0 <= contact_force_off < contact_force_on, got "
                 f"{self.contact_force_off}, {self.contact_force_on}"
             )
-        for name in ("contact_min_samples", "rfrr_features", "rfrr_update_every"):
+        for name in ("contact_min_samples", "rfrr_features", "rfrr_update_every",
+                     "publish_every"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"{name} must be >= 1, got {getattr(self, name)}")
         if self.ft_offset_samples < 0:

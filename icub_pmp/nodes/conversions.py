@@ -27,6 +27,9 @@ __all__ = [
     "make_joint_state",
     "joint_state_field",
     "validate_joint_state",
+    "joint_state_arrays",
+    "set_wrench",
+    "trajectory_extras",
     "wrench_to_array",
     "array_to_wrench",
     "point_to_array",
@@ -125,7 +128,49 @@ def joint_state_field(msg: JointState, field: str = "position") -> dict[str, flo
     return dict(zip(msg.name, (float(v) for v in values)))
 
 
+def joint_state_arrays(
+    msg: JointState, names: Sequence[str], index: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """(positions (n,) [rad], velocities (n,) [rad/s] or None when the message has none,
+    index) of joints ``names``, in that order, from a JointState (joints the message has
+    beyond ``names`` are ignored).
+
+    ``index`` = the positions of ``names`` in ``msg.name`` returned by a previous call for
+    the same name list (skips the name lookup: the 1 kHz path). Raises InvalidInput when a
+    joint is missing, a field has the wrong length or a value is NaN/inf.
+    """
+    n = len(msg.name)
+    if index is None:
+        lookup = {name: i for i, name in enumerate(msg.name)}
+        missing = [name for name in names if name not in lookup]
+        if missing:
+            raise InvalidInput(f"JointState lacks joints {missing}")
+        index = np.array([lookup[name] for name in names], dtype=int)
+    pos = np.asarray(msg.position, dtype=float)
+    if pos.shape != (n,):
+        raise InvalidInput(f"JointState.position has {pos.size} values for {n} names")
+    q = pos[index]
+    v = None
+    if len(msg.velocity):
+        vel = np.asarray(msg.velocity, dtype=float)
+        if vel.shape != (n,):
+            raise InvalidInput(f"JointState.velocity has {vel.size} values for {n} names")
+        v = vel[index]
+        if not math.isfinite(float(v.sum())):
+            raise InvalidInput("JointState.velocity contains NaN or infinite values")
+    if not math.isfinite(float(q.sum())):
+        raise InvalidInput("JointState.position contains NaN or infinite values")
+    return q, v, index
+
+
 # ---------------------------------------------------------------------------- geometry
+def set_wrench(w: Wrench, a: Sequence[float]) -> None:
+    """Fill a Wrench in place from (6,) force then torque [N, N m] (no allocation)."""
+    f, t = w.force, w.torque
+    f.x, f.y, f.z = float(a[0]), float(a[1]), float(a[2])
+    t.x, t.y, t.z = float(a[3]), float(a[4]), float(a[5])
+
+
 def wrench_to_array(w: Wrench) -> np.ndarray:
     """Wrench -> (6,) [fx, fy, fz, tx, ty, tz] in N and N m."""
     return np.array([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z])
@@ -248,6 +293,27 @@ def trajectory_to_arrays(
     if times[0] < 0:
         raise InvalidInput("JointTrajectory time_from_start is negative")
     return names, times, pos, vel
+
+
+def trajectory_extras(msg: JointTrajectory) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(accelerations (N, n) [rad/s^2] or None, efforts (N, n) [N m] or None) of a
+    JointTrajectory: a field is returned only when every point has it for every joint; a
+    point with a partial field raises InvalidInput. Complements :func:`trajectory_to_arrays`.
+    """
+    n = len(msg.joint_names)
+    out = []
+    for field in ("accelerations", "effort"):
+        lengths = {len(getattr(p, field)) for p in msg.points}
+        if lengths - {0, n}:
+            raise InvalidInput(f"JointTrajectory point {field} must be empty or have {n} values")
+        if lengths == {n}:
+            a = np.array([list(getattr(p, field)) for p in msg.points], dtype=float)
+            if not np.all(np.isfinite(a)):
+                raise InvalidInput(f"JointTrajectory {field} contain NaN or infinite values")
+            out.append(a)
+        else:
+            out.append(None)
+    return out[0], out[1]
 
 
 def arrays_to_trajectory(

@@ -1,0 +1,288 @@
+"""impedance_controller: the 1 kHz joint controller (stands in for the iCub controller boards;
+the core is :class:`icub_pmp.control.ImpedanceController`).
+
+subscribes /joint_states (JointState: position + velocity), /estimated_joint_torques
+           (JointState effort, from wrench_estimator), /joint_trajectory
+           (trajectory_msgs/JointTrajectory, reliable), /impedance_controller/velocity_command
+           (JointState: name + velocity [rad/s]; velocity mode, eq 7)
+publishes  /effort_command (JointState: name + effort [N m]; in lockstep the stamp is copied
+           from the /joint_states message it answers), /impedance_controller/state (JointState
+           every ``state_publish_every`` steps: position = desired q_d, velocity = desired
+           q_dot_d, effort = the commanded torque)
+services   /impedance_controller/hold (std_srvs/Trigger): stop every motion, hold the last
+           measured posture
+
+Stepping: with ``lockstep`` every /joint_states message is answered at once (with
+``wait_for_estimate`` only once the estimate of the same stamp has arrived), so the 1 kHz
+loop is exact in simulated time; otherwise a timer at ``rate_hz`` steps on the latest joint
+state. Trajectories start at their header stamp (0 = now, a past stamp = now) in the time of
+the joint states. Bad input (NaN, unknown joints, non-increasing times, points beyond the
+joint limits, missing joints) is dropped with a warning; the controller keeps running.
+Watchdogs: a 20 Hz timer on the node clock (sim time with ``use_sim_time``) trips the safe
+hold when no joint state came for ``state_timeout``; estimates older than
+``estimate_timeout`` switch the torque loop off; both are logged. All
+:class:`ImpedanceControllerConfig` parameters can change at run time (validated).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import rclpy
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from icub_pmp.control.impedance_controller import ImpedanceController
+from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
+from icub_pmp.errors import IcubPmpError, InvalidInput
+from icub_pmp.nodes.conversions import (
+    joint_state_arrays,
+    time_to_sec,
+    trajectory_extras,
+    trajectory_to_arrays,
+)
+
+__all__ = ["ImpedanceControllerNode", "main"]
+
+_TRAJ_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+
+
+class ImpedanceControllerNode(Node):
+    """The impedance_controller node (module doc)."""
+
+    def __init__(self) -> None:
+        super().__init__("impedance_controller")
+        defaults = ImpedanceControllerConfig()
+        for name, value in defaults.to_dict().items():
+            self.declare_parameter(name, value, ParameterDescriptor(
+                description=f"ImpedanceControllerConfig.{name} "
+                            "(see config/impedance_controller.yaml)"))
+        config = ImpedanceControllerConfig.from_dict(
+            {n: self.get_parameter(n).value for n in defaults.field_names()})
+        self.controller = ImpedanceController(config)
+        self.names = list(self.controller.joint_names)
+        self._js_names: list[str] | None = None
+        self._js_idx: np.ndarray | None = None
+        self._est_names: list[str] | None = None
+        self._est_ns = -1
+        self._pending: tuple[int, object, np.ndarray, np.ndarray] | None = None
+        self._latest: tuple[float, np.ndarray, np.ndarray] | None = None
+        self._t_last: float | None = None
+        self._status = "no_estimate"
+        self.steps = 0
+        self.dropped = 0
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+        sd = qos_profile_sensor_data
+        self.pub_effort = self.create_publisher(JointState, "/effort_command", sd)
+        self.pub_state = self.create_publisher(JointState, "/impedance_controller/state", sd)
+        self._effort = JointState()
+        self._effort.name = self.names
+        self._state = JointState()
+        self._state.name = self.names
+        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd)
+        self.create_subscription(JointState, "/estimated_joint_torques", self._on_estimate, sd)
+        self.create_subscription(JointTrajectory, "/joint_trajectory", self._on_trajectory,
+                                 _TRAJ_QOS)
+        self.create_subscription(JointState, "/impedance_controller/velocity_command",
+                                 self._on_velocity, _TRAJ_QOS)
+        self.create_service(Trigger, "/impedance_controller/hold", self._on_hold)
+        self.create_timer(0.05, self._on_watchdog)
+        self._timer = None
+        self._apply_stepping(config)
+        self.get_logger().info(
+            f"impedance_controller: {len(self.names)} joints, mode {config.mode}, feed-forward "
+            f"{config.feedforward}, torque loop {'on' if config.torque_loop else 'off'}, "
+            f"{'lockstep' if config.lockstep else f'timer at {config.rate_hz} Hz'}")
+
+    # ------------------------------------------------------------------ parameters
+    def _on_set_parameters(self, params: list) -> SetParametersResult:
+        changes = {p.name: p.value for p in params
+                   if p.name in ImpedanceControllerConfig.field_names()}
+        if not changes:
+            return SetParametersResult(successful=True)
+        try:
+            cfg = ImpedanceControllerConfig.from_dict(
+                {**self.controller.config.to_dict(), **changes})
+        except IcubPmpError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        old = self.controller.config
+        self.controller.set_config(cfg)
+        if (old.lockstep, old.rate_hz) != (cfg.lockstep, cfg.rate_hz):
+            self._apply_stepping(cfg)
+        if old.mode != cfg.mode:
+            self.get_logger().info(f"mode {old.mode} -> {cfg.mode}")
+        return SetParametersResult(successful=True)
+
+    def _apply_stepping(self, cfg: ImpedanceControllerConfig) -> None:
+        if self._timer is not None:
+            self.destroy_timer(self._timer)
+            self._timer = None
+        if not cfg.lockstep:
+            self._timer = self.create_timer(1.0 / cfg.rate_hz, self._on_timer)
+
+    # ------------------------------------------------------------------ inputs
+    def _warn(self, text: str) -> None:
+        self.dropped += 1
+        self.get_logger().warning(text, throttle_duration_sec=2.0)
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        try:
+            if msg.name != self._js_names:
+                self._js_idx = None
+                self._js_names = list(msg.name)
+            q, v, self._js_idx = joint_state_arrays(msg, self.names, self._js_idx)
+            if v is None:
+                raise InvalidInput("JointState has no velocities")
+        except IcubPmpError as exc:
+            self._js_names = None
+            self._warn(f"/joint_states dropped: {exc}")
+            return
+        stamp = msg.header.stamp
+        ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+        cfg = self.controller.config
+        if not cfg.lockstep:
+            self._latest = (ns * 1e-9, q, v)
+            return
+        if cfg.wait_for_estimate and cfg.torque_loop and self._est_ns < ns:
+            self._pending = (ns, stamp, q, v)
+            return
+        self._step(ns * 1e-9, q, v, stamp)
+
+    def _on_estimate(self, msg: JointState) -> None:
+        try:
+            tau = np.asarray(msg.effort, dtype=float)
+            if tau.shape != (len(msg.name),):
+                raise InvalidInput(f"effort has {tau.size} values for {len(msg.name)} names")
+            t = time_to_sec(msg.header.stamp)
+            self.controller.set_estimate(t, msg.name, tau)
+        except IcubPmpError as exc:
+            self._warn(f"/estimated_joint_torques dropped: {exc}")
+            return
+        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        self._est_ns = max(self._est_ns, ns)
+        p = self._pending
+        if p is not None and p[0] <= self._est_ns:
+            self._pending = None
+            self._step(p[0] * 1e-9, p[2], p[3], p[1])
+
+    def _on_trajectory(self, msg: JointTrajectory) -> None:
+        try:
+            if self._t_last is None:
+                raise InvalidInput("no joint state received yet")
+            names, times, pos, vel = trajectory_to_arrays(msg, self.names)
+            acc, eff = trajectory_extras(msg)
+            start = time_to_sec(msg.header.stamp) or self._t_last
+            traj = self.controller.make_trajectory(names, times, pos, vel, acc, eff, start)
+            self.controller.set_trajectory(traj, self._t_last)
+        except IcubPmpError as exc:
+            self.dropped += 1
+            self.get_logger().warning(f"/joint_trajectory rejected: {exc}")
+            return
+        self.get_logger().info(
+            f"trajectory: {len(names)} joints, {len(times)} points, {times[-1]:.2f} s",
+            throttle_duration_sec=1.0)
+
+    def _on_velocity(self, msg: JointState) -> None:
+        try:
+            if self._t_last is None:
+                raise InvalidInput("no joint state received yet")
+            if len(msg.velocity) != len(msg.name):
+                raise InvalidInput(
+                    f"{len(msg.velocity)} velocities for {len(msg.name)} joint names")
+            self.controller.set_velocity_command(list(msg.name), np.asarray(msg.velocity),
+                                                 self._t_last)
+        except IcubPmpError as exc:
+            self._warn(f"/impedance_controller/velocity_command rejected: {exc}")
+
+    def _on_hold(self, request: Trigger.Request, response: Trigger.Response
+                 ) -> Trigger.Response:
+        if self._t_last is None:
+            response.success = False
+            response.message = "no joint state received yet: nothing to hold"
+            return response
+        self.controller.hold()
+        response.success = True
+        response.message = "holding the last measured posture"
+        self.get_logger().info(response.message)
+        return response
+
+    # ------------------------------------------------------------------ stepping
+    def _on_timer(self) -> None:
+        if self._latest is None or self.controller.safe_hold:
+            return
+        t, q, v = self._latest
+        self._step(t, q, v, self.get_clock().now().to_msg())
+
+    def _on_watchdog(self) -> None:
+        now = self.get_clock().now().nanoseconds * 1e-9
+        if self.controller.check_watchdog(now):
+            self.get_logger().warning(
+                f"no joint state for {self.controller.config.state_timeout} s: safe hold at "
+                "the last measured posture (motions aborted)")
+
+    def _step(self, t: float, q: np.ndarray, v: np.ndarray, stamp) -> None:
+        was_safe = self.controller.safe_hold
+        try:
+            out = self.controller.step(t, q, v)
+        except IcubPmpError as exc:
+            self._warn(f"control step at t = {t:.3f} s skipped: {exc}")
+            return
+        self._t_last = t
+        self.steps += 1
+        m = self._effort
+        m.header.stamp = stamp
+        m.effort = out.tau.tolist()
+        self.pub_effort.publish(m)
+        if was_safe:
+            self.get_logger().info("joint states are back: holding the measured posture")
+        if out.status != self._status:
+            text = f"torque loop: {self._status} -> {out.status}"
+            if out.status == "ok":
+                self.get_logger().info(text)
+            else:
+                self.get_logger().warning(text)
+            self._status = out.status
+        every = self.controller.config.state_publish_every
+        if every and self.steps % every == 0:
+            s = self._state
+            s.header.stamp = stamp
+            s.position = out.setpoint.q.tolist()
+            s.velocity = out.setpoint.v.tolist()
+            s.effort = out.tau.tolist()
+            self.pub_state.publish(s)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point (``ros2 run icub_pmp impedance_controller``).
+
+    Spins an ``EventsExecutor`` (several times the message throughput of the default one)
+    with ``spin_once`` in a loop: its ``spin()`` does not process callbacks in the Jazzy
+    wheel.
+    """
+    rclpy.init(args=args)
+    node = None
+    executor = None
+    try:
+        node = ImpedanceControllerNode()
+        executor = EventsExecutor()
+        executor.add_node(node)
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        if executor is not None:
+            executor.shutdown()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()

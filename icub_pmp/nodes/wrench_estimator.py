@@ -1,0 +1,265 @@
+"""wrench_estimator: joint torques, external hand wrenches and contact flags from the joint
+states and the arm FT sensors (stands in for wholeBodyDynamics; the core is
+:class:`icub_pmp.dynamics.WrenchEstimator`).
+
+subscribes /joint_states (JointState), /ft/l_arm_ft, /ft/r_arm_ft (WrenchStamped), /imu (Imu,
+           when ``gravity_source`` is ``imu``)
+publishes  /estimated_joint_torques (JointState: name + effort [N m], stamp of the sample),
+           /wrench_estimator/external_wrench/{left,right}_hand (WrenchStamped, hand frame
+           ``l_hand_dh_frame`` / ``r_hand_dh_frame``), /wrench_estimator/external_wrench_root/
+           {left,right}_hand (WrenchStamped, root_link axes, about the hand origin),
+           /wrench_estimator/contact/{left,right}_hand (std_msgs/Bool),
+           /wrench_estimator/predicted_ft/{l_arm_ft,r_arm_ft} (WrenchStamped: the FT reading
+           the model predicts with null hand wrenches, for the Table 1 validation)
+
+Synchronisation: with ``require_same_stamp`` (lockstep with the simulator) a sample is
+processed when the joint state and both arm FT wrenches with the same stamp have arrived (in
+any order); otherwise each joint state is processed with the latest FT wrenches, unless they
+are older than ``stale_timeout`` (then it is skipped with a throttled warning). Malformed
+messages are dropped with a throttled warning. The joint torques are published for every
+sample, the other topics every ``publish_every`` samples. Parameters:
+:class:`WrenchEstimatorConfig` fields (``config/wrench_estimator.yaml``); ``rfrr_enabled``,
+``rfrr_learning``, ``contact_*``, ``require_same_stamp``, ``stale_timeout`` and
+``publish_every`` change at run time, the others rebuild the estimator (its learnt RFRR
+state is lost).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import Imu, JointState
+from std_msgs.msg import Bool
+
+from icub_pmp.dynamics.wrench_estimator import WrenchEstimator
+from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
+from icub_pmp.errors import IcubPmpError, InvalidInput
+from icub_pmp.kinematics.robot_spec import HANDS
+from icub_pmp.nodes.conversions import joint_state_arrays, set_wrench, wrench_to_array
+
+__all__ = ["WrenchEstimatorNode", "main"]
+
+#: parameters applied to the running estimator; any other change rebuilds it
+_LIVE = {"rfrr_enabled", "rfrr_learning", "contact_force_on", "contact_force_off",
+         "contact_min_samples", "require_same_stamp", "stale_timeout", "publish_every"}
+_FT_TOPIC = {"left": "l_arm_ft", "right": "r_arm_ft"}
+_BUFFER = 64  # samples kept while waiting for the matching messages
+
+
+def _ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+class WrenchEstimatorNode(Node):
+    """The wrench_estimator node (module doc)."""
+
+    def __init__(self) -> None:
+        super().__init__("wrench_estimator")
+        defaults = WrenchEstimatorConfig()
+        for name, value in defaults.to_dict().items():
+            self.declare_parameter(name, value, ParameterDescriptor(
+                description=f"WrenchEstimatorConfig.{name} (see config/wrench_estimator.yaml)"))
+        self.config = WrenchEstimatorConfig.from_dict(
+            {n: self.get_parameter(n).value for n in defaults.field_names()})
+        self.estimator = WrenchEstimator(self.config)
+        self.names = list(self.estimator.joint_names)
+        self._cached_names: list[str] | None = None
+        self._idx: np.ndarray | None = None
+        self._js: dict[int, JointState] = {}
+        self._ft: dict[str, dict[int, np.ndarray]] = {h: {} for h in HANDS}
+        self._imu: np.ndarray | None = None
+        self._last_ns = -1
+        self.samples = 0
+        self.dropped = 0
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+        sd = qos_profile_sensor_data
+        self.pub_tau = self.create_publisher(JointState, "/estimated_joint_torques", sd)
+        self.pub_ext = {h: self.create_publisher(
+            WrenchStamped, f"/wrench_estimator/external_wrench/{h}_hand", sd) for h in HANDS}
+        self.pub_ext_root = {h: self.create_publisher(
+            WrenchStamped, f"/wrench_estimator/external_wrench_root/{h}_hand", sd)
+            for h in HANDS}
+        self.pub_contact = {h: self.create_publisher(
+            Bool, f"/wrench_estimator/contact/{h}_hand", sd) for h in HANDS}
+        self.pub_pred = {h: self.create_publisher(
+            WrenchStamped, f"/wrench_estimator/predicted_ft/{_FT_TOPIC[h]}", sd) for h in HANDS}
+        # reusable messages
+        self._tau_msg = JointState()
+        self._tau_msg.name = self.names
+        self._ext_msg = {h: WrenchStamped() for h in HANDS}
+        self._ext_root_msg = {h: WrenchStamped() for h in HANDS}
+        self._pred_msg = {h: WrenchStamped() for h in HANDS}
+        for h in HANDS:
+            self._ext_msg[h].header.frame_id = self.estimator.spec.hand_frame(h)
+            self._ext_root_msg[h].header.frame_id = self.estimator.spec.root_frame
+            self._pred_msg[h].header.frame_id = _FT_TOPIC[h]
+        self._bool = {h: Bool() for h in HANDS}
+
+        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd)
+        for h in HANDS:
+            self.create_subscription(WrenchStamped, f"/ft/{_FT_TOPIC[h]}",
+                                     lambda m, h=h: self._on_ft(h, m), sd)
+        self.create_subscription(Imu, "/imu", self._on_imu, sd)
+        self.get_logger().info(
+            f"wrench_estimator: {len(self.names)} joints, FT convention "
+            f"{self.config.ft_convention}, gravity from {self.config.gravity_source}, "
+            f"RFRR {'on' if self.config.rfrr_enabled else 'off'} "
+            f"(D={self.config.rfrr_features}), same-stamp sync "
+            f"{'on' if self.config.require_same_stamp else 'off'}")
+
+    # ------------------------------------------------------------------ parameters
+    def _on_set_parameters(self, params: list) -> SetParametersResult:
+        changes = {p.name: p.value for p in params
+                   if p.name in WrenchEstimatorConfig.field_names()}
+        if not changes:
+            return SetParametersResult(successful=True)
+        try:
+            cfg = WrenchEstimatorConfig.from_dict({**self.config.to_dict(), **changes})
+            if set(changes) <= _LIVE:
+                self.estimator.apply_live_config(cfg)
+            else:
+                self.estimator = WrenchEstimator(cfg)
+                self.get_logger().info(f"estimator rebuilt for {sorted(changes)}")
+        except IcubPmpError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        self.config = cfg
+        return SetParametersResult(successful=True)
+
+    # ------------------------------------------------------------------ inputs
+    def _warn(self, text: str) -> None:
+        self.dropped += 1
+        self.get_logger().warning(text, throttle_duration_sec=2.0)
+
+    def _on_ft(self, hand: str, msg: WrenchStamped) -> None:
+        w = wrench_to_array(msg.wrench)
+        if not np.all(np.isfinite(w)):
+            self._warn(f"/ft/{_FT_TOPIC[hand]}: NaN or infinite wrench dropped")
+            return
+        ns = _ns(msg.header.stamp)
+        buf = self._ft[hand]
+        buf[ns] = w
+        if len(buf) > _BUFFER:
+            del buf[min(buf)]
+        if self.config.require_same_stamp and ns in self._js:
+            self._try(ns)
+
+    def _on_imu(self, msg: Imu) -> None:
+        a = msg.linear_acceleration
+        acc = np.array([a.x, a.y, a.z])
+        if np.all(np.isfinite(acc)):
+            self._imu = acc
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        ns = _ns(msg.header.stamp)
+        if self.config.require_same_stamp:
+            self._js[ns] = msg
+            if len(self._js) > _BUFFER:
+                del self._js[min(self._js)]
+            self._try(ns)
+        else:
+            ft = {}
+            for h in HANDS:
+                buf = self._ft[h]
+                if not buf:
+                    self._warn("no FT wrench received yet: joint state skipped")
+                    return
+                last = max(buf)
+                if (ns - last) * 1e-9 > self.config.stale_timeout:
+                    self._warn(f"/ft/{_FT_TOPIC[h]} is stale ({(ns - last) * 1e-9:.3f} s "
+                               "older than the joint states): sample skipped")
+                    return
+                ft[h] = buf[last]
+            self._process(ns, msg, ft)
+
+    def _try(self, ns: int) -> None:
+        """Process stamp ``ns`` if the joint state and both FT wrenches are there."""
+        if ns not in self._js or any(ns not in self._ft[h] for h in HANDS):
+            return
+        msg = self._js.pop(ns)
+        ft = {h: self._ft[h].pop(ns) for h in HANDS}
+        for old in [k for k in self._js if k < ns]:  # never go back in time
+            del self._js[old]
+        for h in HANDS:
+            for old in [k for k in self._ft[h] if k < ns]:
+                del self._ft[h][old]
+        self._process(ns, msg, ft)
+
+    # ------------------------------------------------------------------ processing
+    def _process(self, ns: int, msg: JointState, ft: dict[str, np.ndarray]) -> None:
+        if ns <= self._last_ns:
+            return
+        try:
+            if msg.name != self._cached_names:
+                self._idx = None
+                self._cached_names = list(msg.name)
+            q, v, self._idx = joint_state_arrays(msg, self.names, self._idx)
+            imu = self._imu if self.config.gravity_source == "imu" else None
+            if self.config.gravity_source == "imu" and imu is None:
+                raise InvalidInput("gravity_source is imu but no /imu message arrived yet")
+            est = self.estimator.update(ns * 1e-9, q, v, ft, imu)
+        except IcubPmpError as exc:
+            self._cached_names = None
+            self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
+            return
+        self._last_ns = ns
+        self.samples += 1
+        stamp = msg.header.stamp
+        m = self._tau_msg
+        m.header.stamp = stamp
+        m.effort = est.tau.tolist()
+        self.pub_tau.publish(m)
+        if self.samples % self.config.publish_every:
+            return
+        for h in HANDS:
+            e = self._ext_msg[h]
+            e.header.stamp = stamp
+            set_wrench(e.wrench, est.ext_hand[h])
+            self.pub_ext[h].publish(e)
+            r = self._ext_root_msg[h]
+            r.header.stamp = stamp
+            set_wrench(r.wrench, est.ext_root[h])
+            self.pub_ext_root[h].publish(r)
+            p = self._pred_msg[h]
+            p.header.stamp = stamp
+            set_wrench(p.wrench, est.ft_predicted[h])
+            self.pub_pred[h].publish(p)
+            b = self._bool[h]
+            b.data = bool(est.contact[h])
+            self.pub_contact[h].publish(b)
+
+
+def main(args: list[str] | None = None) -> None:
+    """Entry point (``ros2 run icub_pmp wrench_estimator``).
+
+    Spins an ``EventsExecutor`` (several times the message throughput of the default one)
+    with ``spin_once`` in a loop: its ``spin()`` does not process callbacks in the Jazzy
+    wheel.
+    """
+    rclpy.init(args=args)
+    node = None
+    executor = None
+    try:
+        node = WrenchEstimatorNode()
+        executor = EventsExecutor()
+        executor.add_node(node)
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        if executor is not None:
+            executor.shutdown()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()

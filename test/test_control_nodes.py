@@ -1,0 +1,220 @@
+"""End to end over DDS: sim_bridge (lockstep) + wrench_estimator + impedance_controller as
+subprocesses started through their scripts, in a private domain; the test talks to them as a
+user would (topics, services), in simulated time."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+from geometry_msgs.msg import Wrench, WrenchStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from icub_interfaces.srv import ApplyWrench
+from icub_pmp.kinematics.robot_spec import RobotSpec
+from icub_pmp.nodes.conversions import arrays_to_trajectory, sec_to_duration
+from icub_pmp.testing import (
+    NodeGraph,
+    NodeProcess,
+    RosProbe,
+    repo_root,
+    reserve_domain_id,
+    ros_environment,
+)
+
+NODES = ["sim_bridge", "wrench_estimator", "impedance_controller"]
+
+
+class _Recorder:
+    """Messages of some topics, keyed by header stamp [ns] (thread-safe)."""
+
+    def __init__(self, probe: RosProbe, topics: dict[str, type]):
+        self.lock = threading.Lock()
+        self.data: dict[str, dict[int, object]] = {t: {} for t in topics}
+        self.subs = [probe.node.create_subscription(
+            cls, topic, lambda m, t=topic: self._cb(t, m), qos_profile_sensor_data)
+            for topic, cls in topics.items()]
+
+    def _cb(self, topic: str, msg) -> None:
+        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        with self.lock:
+            self.data[topic][ns] = msg
+
+    def get(self, topic: str) -> dict[int, object]:
+        with self.lock:
+            return dict(self.data[topic])
+
+
+@pytest.fixture(scope="module")
+def graph(ros_domain_id):
+    env = ros_environment(ros_domain_id)
+    params = {
+        "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10},
+        "wrench_estimator": {"use_sim_time": True},
+        "impedance_controller": {"use_sim_time": True},
+    }
+    with NodeGraph(NODES, params, env=env) as g:
+        yield g
+
+
+@pytest.fixture(scope="module")
+def probe(graph, ros_domain_id):
+    p = RosProbe(ros_domain_id, "control_e2e_probe")
+    try:
+        assert p.wait_for_topic("/effort_command", 90), graph.outputs()
+        assert p.wait_for_topic("/estimated_joint_torques", 90), graph.outputs()
+        yield p
+    finally:
+        p.close()
+
+
+def _sim_time(probe: RosProbe) -> float:
+    c = probe.collect("/clock", Clock, 1, 20.0)
+    assert c, "no /clock"
+    return c[0].clock.sec + c[0].clock.nanosec * 1e-9
+
+
+def _wait_sim(probe: RosProbe, dt: float, timeout: float = 120.0) -> float:
+    """Wait until simulated time advanced by ``dt`` [s]; returns the new time."""
+    t0 = _sim_time(probe)
+    deadline = time.monotonic() + timeout
+    t = t0
+    while t - t0 < dt and time.monotonic() < deadline:
+        time.sleep(0.2)
+        t = _sim_time(probe)
+    assert t - t0 >= dt, f"simulated time advanced only {t - t0:.3f} s in {timeout} s"
+    return t
+
+
+def test_lockstep_loop_answers_every_joint_state_and_holds(graph, probe):
+    """Every /effort_command carries the stamp of a /joint_states message (lockstep), the
+    estimator publishes torques for the same stamps, and the robot holds its rest posture
+    within 0.5 deg against gravity."""
+    rec = _Recorder(probe, {"/joint_states": JointState, "/effort_command": JointState,
+                            "/estimated_joint_torques": JointState})
+    _wait_sim(probe, 0.3)
+    js, eff, est = (rec.get(t) for t in ("/joint_states", "/effort_command",
+                                         "/estimated_joint_torques"))
+    assert len(eff) > 100 and len(est) > 100
+    common = set(js) & set(eff)
+    assert len(common) > 0.9 * min(len(js), len(eff))
+    assert set(est) & set(js)
+    spec = RobotSpec.load()
+    rest = spec.posture("rest")
+    for msg in list(js.values())[-50:]:
+        q = dict(zip(msg.name, msg.position))
+        for j in spec.upper_body_joints:
+            assert abs(math.degrees(q[j] - rest[j])) < 0.5, j
+
+
+def test_trajectory_is_followed_and_bad_ones_are_rejected(graph, probe):
+    """A /joint_trajectory (r_elbow +0.3 rad in 0.5 s) is followed to within 0.5 deg; a NaN
+    point, an unknown joint and non-increasing times are rejected with a logged reason
+    while the loop keeps running."""
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    pub = probe.node.create_publisher(JointTrajectory, "/joint_trajectory", qos)
+    probe.wait_for(lambda: pub.get_subscription_count() > 0, 20.0)
+    js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
+    q0 = dict(zip(js.name, js.position))["r_elbow"]
+    target = q0 + 0.3
+    bad_nan = arrays_to_trajectory(["r_elbow"], [0.5], np.array([[math.nan]]))
+    bad_name = arrays_to_trajectory(["r_knee"], [0.5], np.array([[0.1]]))
+    bad_time = JointTrajectory(joint_names=["r_elbow"], points=[
+        JointTrajectoryPoint(positions=[q0], time_from_start=sec_to_duration(0.5)),
+        JointTrajectoryPoint(positions=[q0], time_from_start=sec_to_duration(0.2))])
+    for m in (bad_nan, bad_name, bad_time):
+        pub.publish(m)
+    pub.publish(arrays_to_trajectory(["r_elbow"], [0.5], np.array([[target]])))
+    _wait_sim(probe, 0.8)
+    js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
+    q = dict(zip(js.name, js.position))["r_elbow"]
+    assert abs(math.degrees(q - target)) < 0.5
+    out = graph.procs["impedance_controller"].output()
+    assert out.count("/joint_trajectory rejected") >= 3, out[-3000:]
+    assert "NaN" in out and "r_knee" in out and "strictly increasing" in out
+    probe.node.destroy_publisher(pub)
+
+
+def test_external_wrench_and_contact_over_dds(graph, probe):
+    """A 3 N push on the left hand through /sim/apply_wrench: the estimator's root_link wrench
+    matches /ground_truth/contact_wrench/left_hand (same stamps) within 5 % or 0.1 N and the
+    contact flag turns on."""
+    rec = _Recorder(probe, {"/ground_truth/contact_wrench/left_hand": WrenchStamped,
+                            "/wrench_estimator/external_wrench_root/left_hand": WrenchStamped})
+    contact: list[bool] = []
+    sub = probe.node.create_subscription(Bool, "/wrench_estimator/contact/left_hand",
+                                         lambda m: contact.append(m.data),
+                                         qos_profile_sensor_data)
+    req = ApplyWrench.Request(target="l_hand_dh_frame", duration=2.0)
+    req.wrench = Wrench()
+    req.wrench.force.y, req.wrench.force.z = -1.5, 2.6
+    resp = probe.call("/sim/apply_wrench", ApplyWrench, req)
+    assert resp.success, resp.message
+    _wait_sim(probe, 0.6)
+    gt = rec.get("/ground_truth/contact_wrench/left_hand")
+    est = rec.get("/wrench_estimator/external_wrench_root/left_hand")
+    both = sorted(set(gt) & set(est))[-100:]
+    assert len(both) > 20
+    for ns in both:
+        f_gt = np.array([gt[ns].wrench.force.x, gt[ns].wrench.force.y, gt[ns].wrench.force.z])
+        f_est = np.array([est[ns].wrench.force.x, est[ns].wrench.force.y,
+                          est[ns].wrench.force.z])
+        if np.linalg.norm(f_gt) > 2.9:  # the push is on
+            assert np.linalg.norm(f_est - f_gt) <= max(0.05 * np.linalg.norm(f_gt), 0.1)
+    assert contact and contact[-1]
+    probe.node.destroy_subscription(sub)
+
+
+def test_hold_service_and_estimate_watchdog(graph, probe):
+    """/impedance_controller/hold answers success; killing the estimator trips the estimate
+    watchdog (logged 'estimate_stale') while the controller keeps answering the simulator."""
+    resp = probe.call("/impedance_controller/hold", Trigger, Trigger.Request())
+    assert resp.success, resp.message
+    graph.kill("wrench_estimator")
+    ctl = graph.procs["impedance_controller"]
+    assert ctl.wait_for_output("estimate_stale", 60.0), ctl.output()[-3000:]
+    n = len(probe.collect("/effort_command", JointState, 20, 30.0))
+    assert n == 20
+
+
+def test_joint_state_watchdog_trips_safe_hold():
+    """A controller alone (wall clock, own domain) fed joint states that then stop trips its
+    watchdog to a safe hold with a warning, and resumes when joint states come back."""
+    with reserve_domain_id() as did:
+        _watchdog(did)
+
+
+def _watchdog(did: int) -> None:
+    proc = NodeProcess(command=[str(repo_root() / "scripts/impedance_controller.sh")],
+                       env=ros_environment(did))
+    probe = RosProbe(did, "watchdog_probe")
+    try:
+        pub = probe.node.create_publisher(JointState, "/joint_states", qos_profile_sensor_data)
+        assert probe.wait_for(lambda: pub.get_subscription_count() > 0, 60.0), proc.output()
+        spec = RobotSpec.load()
+        rest = spec.posture("rest")
+
+        def send(n: int) -> None:
+            for _ in range(n):
+                m = JointState(name=list(spec.actuated_joints))
+                m.header.stamp = probe.node.get_clock().now().to_msg()
+                m.position = [rest[j] for j in m.name]
+                m.velocity = [0.0] * len(m.name)
+                pub.publish(m)
+                time.sleep(0.005)
+
+        send(40)
+        assert proc.wait_for_output("safe hold", 20.0), proc.output()[-2000:]
+        send(20)
+        assert proc.wait_for_output("joint states are back", 20.0), proc.output()[-2000:]
+    finally:
+        probe.close()
+        proc.stop()
