@@ -44,8 +44,9 @@ class PmpConfig(ConfigBase):
     joint_limit_alpha: float = 1.0e-3  # scale of the joint-limit field [N m]
     # relaxation (integration in relaxation time s)
     initial_step: float = 0.05  # first step [s units]
-    step_growth: float = 1.35  # geometric growth of the step
-    max_step: float = 1000.0  # largest step [s units]
+    step_growth: float = 1.35  # growth of the step from one step to the next
+    max_step: float = 1.0e4  # largest step [s units]
+    max_displacement: float = 0.0  # >0: step control, hand motion per step [m]
     max_steps: int = 200  # per relaxation
     stall_steps: int = 15  # steps without 1% improvement = equilibrium
     convergence_tolerance: float = 1.0e-4  # stop when every hand is this close [m]
@@ -65,19 +66,22 @@ class PmpConfig(ConfigBase):
     torque_limit_margin: float = 0.95  # settle below this fraction of each rating
     torque_gravity: bool = True  # include gravity torques in the required torques
     settle_max_steps: int = 300
+    settle_max_step: float = 100.0  # largest settling step [s units] (the saturation field is
+    # linearised by its diagonal only: long steps would let the hand drift off the target)
 
     def validate(self) -> None:
         """Check ranges; raise :class:`ConfigError` naming the field."""
         positive = (
             "tau", "sample_period", "rotation_length_scale", "rotation_stiffness", "initial_step",
             "max_step", "convergence_tolerance", "rotation_tolerance", "success_tolerance",
-            "rotation_success_tolerance", "posture_field_decay",
+            "rotation_success_tolerance", "posture_field_decay", "settle_max_step",
         )
         for name in positive:
             v = getattr(self, name)
             if not math.isfinite(v) or v <= 0:
                 raise ConfigError(f"PmpConfig.{name}: expected a finite value > 0, got {v}")
-        nonneg = ("curl", "joint_limit_alpha", "posture_field_gain", "start_tolerance")
+        nonneg = ("curl", "joint_limit_alpha", "posture_field_gain", "start_tolerance",
+                  "max_displacement")
         for name in nonneg:
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:

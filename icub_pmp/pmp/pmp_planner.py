@@ -80,12 +80,16 @@ class PmpPlanner:
         c = self.config
         self._field = ForceField(np.zeros(3), np.array(c.stiffness), c.curl, c.curl_axis)
         self._relax = Relaxation(self._settings(self.config.max_steps))
-        self._settle = Relaxation(self._settings(self.config.settle_max_steps, normalise=False))
+        self._settle = Relaxation(self._settings(
+            self.config.settle_max_steps, normalise=False, max_step=self.config.settle_max_step))
 
-    def _settings(self, max_steps: int, normalise: bool = True) -> RelaxationSettings:
+    def _settings(self, max_steps: int, normalise: bool = True,
+                  max_step: float | None = None) -> RelaxationSettings:
         c = self.config
         return RelaxationSettings(
-            initial_step=c.initial_step, step_growth=c.step_growth, max_step=c.max_step,
+            initial_step=c.initial_step, step_growth=c.step_growth,
+            max_step=c.max_step if max_step is None else max_step,
+            max_displacement=c.max_displacement,
             max_steps=max_steps, stall_steps=c.stall_steps, tolerance=c.convergence_tolerance,
             rotation_tolerance=c.rotation_tolerance, boundary_fraction=c.boundary_fraction,
             normalise_rate=normalise, balance_hands=normalise and c.balance_hands,
