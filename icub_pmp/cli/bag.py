@@ -94,7 +94,8 @@ def run_record(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"bag": result.path, "received": result.received,
                           "written": result.written, "lost": result.lost,
-                          "size_bytes": result.size_bytes}), flush=True)
+                          "size_bytes": result.size_bytes, "cpu_s": round(result.cpu_s, 3),
+                          "duration_s": round(result.duration_s, 3)}), flush=True)
     return 0
 
 

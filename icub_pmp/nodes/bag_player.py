@@ -175,9 +175,11 @@ def _replay(
     next_clock = float("inf")
     clock_period = 1.0 / clock_hz if clock_hz else float("inf")
 
-    def publish_clock(wall: float) -> None:
+    def publish_clock(wall: float, limit: int | None = None) -> None:
         nonlocal clock_count
         ns = first_log + int((wall - t0) * rate * 1e9)
+        if limit is not None:
+            ns = min(ns, limit)
         msg = Clock()
         msg.clock.sec, msg.clock.nanosec = divmod(ns, 1_000_000_000)
         clock_pub.publish(msg)
@@ -216,7 +218,7 @@ def _replay(
         if not first_pub:
             first_pub = pub_t
     if clock_pub is not None and first_log is not None and not stop["why"]:
-        publish_clock(time.perf_counter())
+        publish_clock(time.perf_counter(), limit=last_log)  # the bag's last time
     for p in pubs.values():
         if p.qos_profile.reliability == ReliabilityPolicy.RELIABLE:
             p.wait_for_all_acked(Duration(seconds=2))

@@ -29,6 +29,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 from rosbags.interfaces import (
     Qos,
     QosDurability,
@@ -89,6 +90,7 @@ class RecordResult:
     lost: dict[str, int]
     duration_s: float  # wall time from the first subscription to the end [s]
     size_bytes: int
+    cpu_s: float = 0.0  # CPU time of the recording process (user + system) [s]
 
     @property
     def total(self) -> int:
@@ -258,6 +260,7 @@ def record(
     duration: float = 0.0,
     max_wait: float = 0.0,
     flush_interval: float = 0.5,
+    drain: float = 1.0,
     domain_id: int | None = None,
     log: Callable[[str], None] | None = None,
     custom_data: dict[str, str] | None = None,
@@ -265,10 +268,12 @@ def record(
     """Record until SIGINT/SIGTERM (or ``duration`` s), then finalise the bag at ``path``.
 
     ``max_wait`` > 0: fail if a requested topic has no publisher after that many seconds.
+    ``drain``: after the stop, keep writing what already arrived for at most this long [s].
     """
     from rclpy.experimental import EventsExecutor
 
     log = log or (lambda s: print(s, flush=True))
+    cpu0 = _cpu_seconds()
     writer = BagWriter(
         path,
         compression=compression,
@@ -294,12 +299,23 @@ def record(
         log(f"recording to {path} (Ctrl-C to stop)")
         t_end = time.monotonic() + duration if duration > 0 else float("inf")
         waited = time.monotonic()
+        never = Future()  # spin in C++ for 0.1 s slices (many messages per Python call)
         while not stop["why"] and ctx.ok() and time.monotonic() < t_end:
-            executor.spin_once(timeout_sec=0.1)
+            executor.spin_until_future_complete(never, timeout_sec=0.1)
             if max_wait > 0 and recorder.missing() and time.monotonic() - waited > max_wait:
                 raise BagError(
                     f"no publisher for {', '.join(recorder.missing())} after {max_wait} s"
                 )
+        # Drain what DDS already delivered: stop after a 50 ms slice without messages
+        # (at most `drain` s, so live traffic cannot keep the recording going).
+        t_drain = time.monotonic() + drain
+        before = -1
+        while ctx.ok() and time.monotonic() < t_drain:
+            now_total = sum(recorder.received.values())
+            if now_total == before:
+                break
+            before = now_total
+            executor.spin_until_future_complete(never, timeout_sec=0.05)
         recorder.stop()
     finally:
         # Finalise whatever happens: a second Ctrl-C must not interrupt the footer.
@@ -323,7 +339,15 @@ def record(
         lost=lost,
         duration_s=time.monotonic() - started,
         size_bytes=stats.bytes_written,
+        cpu_s=_cpu_seconds() - cpu0,
     )
+
+
+def _cpu_seconds() -> float:
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
 
 
 def format_result(result: RecordResult, topics: Iterable[str] | None = None) -> str:

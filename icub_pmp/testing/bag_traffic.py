@@ -9,9 +9,11 @@ cameras ``/cam/left|right/image_raw`` (rgb8 320x240, 30 Hz, sensor-data QoS),
 service introspection on (so ``/pmp/reach/_service_event`` carries every request and response)
 called by the same process at 2 Hz. Message ``k`` of a topic carries ``k`` (header stamp =
 ``k`` ms of "sim time" for the 1 kHz topics, ``frame_id``/pixels for the others) so a test can
-check order and content. It waits until every publisher has a subscriber (``--subscribers``),
-publishes for ``--duration`` s on an absolute 1 ms schedule, then prints ONE JSON line
-``{"published": {topic: count}, "duration_s": ..., "late_ticks": ...}``.
+check order and content (``--reliable``: every topic reliable with depth 1000, so DDS cannot
+drop; the default is the graph's QoS). It waits until every publisher has a subscriber
+(``--subscribers``), publishes for ``--duration`` s on an absolute 1 ms schedule, waits until
+its subscribers acknowledged every reliable sample, then prints ONE JSON line
+``{"published": {topic: count}, "duration_s": ..., "late_ticks": ..., "acked": ...}``.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import time
 import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
+from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -55,9 +58,13 @@ def _stamp(ms: int) -> Time:
 class TrafficNode(Node):
     """Publishers of the recorded topics and a /pmp/reach server with introspection."""
 
-    def __init__(self, cameras: bool = True, clock: bool = True, reach: bool = True):
+    def __init__(self, cameras: bool = True, clock: bool = True, reach: bool = True,
+                 reliable: bool = False):
         super().__init__("bag_traffic")
-        sensor = qos_profile_sensor_data
+        # The graph's QoS (best effort for sensors), or reliable with a deep history: then DDS
+        # itself cannot lose a sample, and a count mismatch can only come from the recorder.
+        sensor = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE) if reliable \
+            else qos_profile_sensor_data
         self.clock_pub = self.create_publisher(Clock, "/clock", sensor) if clock else None
         self.js_pub = self.create_publisher(JointState, "/joint_states", sensor)
         self.ft_pubs = [self.create_publisher(WrenchStamped, t, sensor) for t in FT_TOPICS]
@@ -153,10 +160,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-cameras", action="store_true")
     ap.add_argument("--no-clock", action="store_true")
     ap.add_argument("--no-reach", action="store_true")
+    ap.add_argument("--reliable", action="store_true",
+                    help="reliable QoS, depth 1000 for every topic (default: the graph's QoS)")
     args = ap.parse_args(argv)
     rclpy.init()
     node = TrafficNode(cameras=not args.no_cameras, clock=not args.no_clock,
-                       reach=not args.no_reach)
+                       reach=not args.no_reach, reliable=args.reliable)
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     done = threading.Event()
@@ -180,9 +189,13 @@ def main(argv: list[str] | None = None) -> int:
         late = node.run(args.duration)
         elapsed = time.perf_counter() - t0
         time.sleep(0.5)  # let the last service answers go out
+        acked = all(  # reliable: every subscriber holds every sample (nothing in flight)
+            p.wait_for_all_acked(Duration(seconds=20)) for p in node.publishers()
+            if p.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+        )
         node.counts["/pmp/reach (answered)"] = node.reach_answered
         print(json.dumps({"published": node.counts, "duration_s": round(elapsed, 3),
-                          "late_ticks": late}), flush=True)
+                          "late_ticks": late, "acked": acked}), flush=True)
     except KeyboardInterrupt:
         pass
     finally:

@@ -1,0 +1,201 @@
+"""Recording and replaying over real DDS: scripts/record.sh and scripts/replay.sh as
+subprocesses in the session's private ROS_DOMAIN_ID, against a traffic process that publishes
+the graph's streams at their real rates (icub_pmp.testing.bag_traffic)."""
+
+from __future__ import annotations
+
+import json
+import signal
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from geometry_msgs.msg import WrenchStamped
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.serialization import deserialize_message
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Image, JointState
+from trajectory_msgs.msg import JointTrajectory
+
+from icub_interfaces.srv import Reach_Event
+from icub_pmp.bags import BagReader, BagStatus
+from icub_pmp.testing import NodeProcess, repo_root
+
+SCRIPTS = repo_root() / "scripts"
+EXCLUDE = ["--exclude", "^/rosout$|^/parameter_events$"]
+TYPES = {"/clock": Clock, "/joint_states": JointState, "/joint_trajectory": JointTrajectory,
+         "/cam/left/image_raw": Image, "/cam/right/image_raw": Image,
+         "/pmp/reach/_service_event": Reach_Event}
+
+
+def _type(topic: str):
+    return WrenchStamped if topic.startswith("/ft/") else TYPES[topic]
+
+
+def _traffic(*args: str) -> NodeProcess:
+    return NodeProcess(command=[str(SCRIPTS / "env.sh"), sys.executable, "-m",
+                                "icub_pmp.testing.bag_traffic", *args])
+
+
+def _json_line(proc: NodeProcess, key: str) -> dict:
+    for line in reversed(proc.output().splitlines()):
+        if line.startswith("{") and key in line:
+            return json.loads(line)
+    raise AssertionError(f"no JSON line with {key!r} in:\n{proc.output()}")
+
+
+def _record(bag: Path, *extra: str) -> NodeProcess:
+    rec = NodeProcess(command=[str(SCRIPTS / "record.sh"), "-o", str(bag), *extra])
+    assert rec.wait_for_output("recording to", 60), rec.output()
+    return rec
+
+
+def _decoded(bag: Path) -> dict[str, list]:
+    out: dict[str, list] = {}
+    for m in BagReader(bag).messages():
+        out.setdefault(m.topic, []).append(deserialize_message(m.data, _type(m.topic)))
+    return out
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory, ros_domain_id):
+    """2 s of full-rate traffic recorded with `record.sh --all`, stopped by SIGINT. The
+    traffic is reliable (depth 1000) so that DDS cannot drop on this shared, overloaded
+    machine: any count mismatch is the recorder's. bench/bag.py measures the graph's
+    best-effort QoS."""
+    bag = tmp_path_factory.mktemp("rec") / "run"
+    rec = _record(bag, "--all", *EXCLUDE)
+    traffic = _traffic("--duration", "2", "--reliable")
+    assert traffic.proc.wait(120) == 0, traffic.output()
+    published = _json_line(traffic, "published")["published"]
+    code = rec.stop(30)
+    return bag, published, code, rec.output()
+
+
+def test_sigint_finalises_the_bag(recorded):
+    """Ctrl-C (SIGINT) ends the recorder with exit code 0 and a finalised bag."""
+    bag, _, code, out = recorded
+    assert code == 0, out
+    assert (bag / "metadata.yaml").is_file()
+    assert BagReader(bag).info().status == BagStatus.CLOSED
+    assert "wrote" in out
+
+
+def test_recording_drops_nothing(recorded):
+    """Every message published at full rate (1 kHz joints, 4 FT and clock, 30 Hz cameras,
+    trajectories) is in the bag, and every reach request/answer of the introspected service."""
+    bag, published, _, _ = recorded
+    counts = {t.name: t.count for t in BagReader(bag).info().topics}
+    for topic, n in published.items():
+        if topic.startswith("/pmp/reach"):
+            continue
+        assert counts.get(topic) == n, (topic, counts.get(topic), n)
+    # server-side introspection: REQUEST_RECEIVED + RESPONSE_SENT per answered call
+    assert counts["/pmp/reach/_service_event"] == 2 * published["/pmp/reach (answered)"]
+
+
+def test_recorded_content_and_order(recorded):
+    """Messages decode to what was published, each topic in publication order."""
+    bag, published, _, _ = recorded
+    msgs = _decoded(bag)
+    ks = [m.header.stamp.sec * 1000 + m.header.stamp.nanosec // 1_000_000
+          for m in msgs["/joint_states"]]
+    assert ks == list(range(published["/joint_states"]))
+    assert [m.wrench.force.x for m in msgs["/ft/r_arm_ft"]] == [float(k) for k in ks]
+    assert [m.data[0] for m in msgs["/cam/left/image_raw"]] == [
+        n % 256 for n in range(published["/cam/left/image_raw"])]
+    events = msgs["/pmp/reach/_service_event"]
+    taus = [e.request[0].tau for e in events if e.request]  # REQUEST_RECEIVED events
+    assert taus == [250.0 + 500.0 * i for i in range(published["/pmp/reach (answered)"])]
+    assert [e.response[0].success for e in events if e.response] == [True] * len(taus)
+
+
+def test_bag_metadata_has_offered_qos(recorded):
+    """The publishers' offered QoS (as discovery reports it: reliability, durability, not the
+    depth) is stored per topic, so a stock `ros2 bag play` republishes with it."""
+    info = BagReader(recorded[0]).info()
+    q = info.topic("/joint_states").qos_profiles[0]
+    assert (q.reliability.name, q.durability.name) == ("RELIABLE", "VOLATILE")
+    assert info.topic("/joint_trajectory").qos_profiles[0].reliability.name == "RELIABLE"
+
+
+def test_replay_reproduces_the_stream(recorded, tmp_path):
+    """`replay.sh` at rate 1 republishes every message, decoded equal, in the same per-topic
+    order (recorded again by a second recorder)."""
+    bag = recorded[0]
+    again = tmp_path / "again"
+    rec = _record(again, "--all", *EXCLUDE)
+    play = NodeProcess(command=[str(SCRIPTS / "replay.sh"), str(bag),
+                                "--wait-for-subscribers", "30", "--json"])
+    assert play.proc.wait(120) == 0, play.output()
+    time.sleep(0.5)  # the recorder drains what is in flight
+    assert rec.stop(30) == 0, rec.output()
+    original, replayed = _decoded(bag), _decoded(again)
+    assert set(replayed) == set(original)
+    for topic, msgs in original.items():
+        assert replayed[topic] == msgs, topic
+    stats = _json_line(play, "published")
+    assert sum(stats["published"].values()) == sum(len(m) for m in original.values())
+
+
+def test_replay_with_clock_drives_use_sim_time_nodes(recorded, ros_probe):
+    """With --clock, a use_sim_time node's clock follows the bag time during the replay, and
+    the recorded /clock is not replayed next to it."""
+    bag = recorded[0]
+    info = BagReader(bag).info()
+    node = Node("sim_time_user", context=ros_probe.context,
+                parameter_overrides=[Parameter("use_sim_time", value=True)])
+    ros_probe.executor.add_node(node)
+    seen: list[int] = []
+    clocks: list[int] = []
+    sub = ros_probe.node.create_subscription(
+        Clock, "/clock", lambda m: clocks.append(m.clock.sec * 10**9 + m.clock.nanosec), 100)
+    js = ros_probe.node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+    try:
+        play = NodeProcess(command=[str(SCRIPTS / "replay.sh"), str(bag), "--clock", "200",
+                                    "--topics", "/joint_states", "/clock",
+                                    "--wait-for-subscribers", "30"])
+        while play.alive():
+            t = node.get_clock().now().nanoseconds
+            if t:
+                seen.append(t)
+            time.sleep(0.01)
+        assert play.proc.returncode == 0, play.output()
+    finally:
+        ros_probe.node.destroy_subscription(sub)
+        ros_probe.node.destroy_subscription(js)
+        ros_probe.executor.remove_node(node)
+        node.destroy_node()
+    assert "not replayed" in play.output()
+    assert seen and all(info.start_ns <= t <= info.end_ns for t in seen)
+    assert seen[-1] - seen[0] > 0.5 * (info.end_ns - info.start_ns)  # it advanced with the bag
+    # only the player's bag-time clock arrived (the recorded /clock held 0..2 s sim stamps)
+    assert clocks and min(clocks) >= info.start_ns
+
+
+def test_sigkill_leaves_a_readable_bag(ros_domain_id, tmp_path):
+    """After SIGKILL the bag is readable up to its last flushed chunk, `icub bag info` says it
+    was not closed cleanly, and it replays."""
+    bag = tmp_path / "killed"
+    rec = _record(bag, "/joint_states", "/ft/l_arm_ft")
+    traffic = _traffic("--duration", "3", "--no-cameras", "--no-reach", "--subscribers", "5")
+    assert traffic.wait_for_output('"ready"', 60)
+    time.sleep(2.0)  # > flush interval (0.5 s): some chunks are on disk
+    rec.signal(signal.SIGKILL)
+    rec.proc.wait(10)
+    traffic.proc.wait(60)
+    assert not (bag / "metadata.yaml").exists()
+    reader = BagReader(bag)
+    assert reader.status == BagStatus.UNCLOSED
+    msgs = _decoded(bag)
+    ks = [m.header.stamp.sec * 1000 + m.header.stamp.nanosec // 1_000_000
+          for m in msgs["/joint_states"]]
+    assert len(ks) > 100 and ks == list(range(ks[0], ks[0] + len(ks)))
+    info = NodeProcess(command=[str(SCRIPTS / "env.sh"), "icub", "bag", "info", str(bag)])
+    assert info.proc.wait(60) == 0
+    assert "NOT closed cleanly" in info.output() and "Traceback" not in info.output()
+    play = NodeProcess(command=[str(SCRIPTS / "replay.sh"), str(bag), "--rate", "20"])
+    assert play.proc.wait(60) == 0, play.output()
+    assert "not closed cleanly" in play.output()
