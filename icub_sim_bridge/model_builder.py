@@ -37,7 +37,8 @@ What the model is
 - Cameras ``left_eye_camera`` / ``right_eye_camera`` at the eyes' optical frames (MuJoCo looks
   along -z with +y up: optical frame rotated pi about x), ``fovy`` from fy.
 - Rendering: simplified visual meshes (vertex clustering, ``visual_mesh_cell``), legs and
-  collision hulls in geom groups the eye cameras do not draw, one light without shadows.
+  head shell (the eyes sit inside it) and collision hulls in geom groups the eye cameras do
+  not draw, one light without shadows.
 """
 
 from __future__ import annotations
@@ -210,7 +211,8 @@ class ModelBuilder:
             g.rgba = list(v.rgba)
             g.contype = 0
             g.conaffinity = 0
-            g.group = GROUP_LEGS if leg else GROUP_VISUAL
+            # the eyes sit inside the head shell: the eye cameras skip it (and the legs)
+            g.group = GROUP_LEGS if (leg or link_name == "head") else GROUP_VISUAL
             g.mass = 0.0
         if collide_arm or collide_torso:
             for c in link.collisions:
@@ -410,3 +412,7 @@ class ModelBuilder:
         m, r, h = cfg.cylinder_mass, cfg.cylinder_radius, cfg.cylinder_height
         cyl.mass = m
         cyl.inertia = [m * (3 * r**2 + h**2) / 12, m * (3 * r**2 + h**2) / 12, m * r**2 / 2]
+        for b in (box, cyl):  # centre of mass at the body origin
+            b.ipos = [0.0, 0.0, 0.0]
+            b.iquat = [1.0, 0.0, 0.0, 0.0]
+            b.explicitinertial = True

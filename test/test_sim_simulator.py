@@ -1,0 +1,141 @@
+"""Simulator API: effort commands (validation, saturation, hold hand-over), reset, objects,
+scripted wrenches, and the 1 ms step staying stable with torques at the limits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics import RobotSpec
+from icub_sim_bridge import SimConfig, Simulator
+
+
+@pytest.fixture(scope="module")
+def sim() -> Simulator:
+    return Simulator(SimConfig(cameras_enabled=False))
+
+
+def test_reset_puts_posture_and_holds_it(sim):
+    """After reset('rest') the joints are at the robot.yaml rest posture and, with no command,
+    stay there (internal hold) for a simulated second."""
+    spec = RobotSpec.load()
+    sim.reset("rest")
+    rest = np.array([spec.posture("rest")[n] for n in sim.joint_names])
+    np.testing.assert_allclose(sim.joint_state().position, rest, atol=1e-12)
+    t0 = sim.time
+    sim.step(1000)
+    assert sim.time == pytest.approx(t0 + 1.0)
+    np.testing.assert_allclose(sim.joint_state().position, rest, atol=1e-4)
+    assert not sim.commanded.any()
+
+
+def test_command_is_applied_and_saturated(sim):
+    """A commanded torque is what the actuator applies; beyond the robot.yaml limit it is
+    saturated (l_elbow: 20 N m); the joint leaves the hold."""
+    sim.reset("rest")
+    sat = sim.command(["torso_yaw", "l_elbow"], [1.5, -100.0])
+    np.testing.assert_allclose(sat, [1.5, -20.0])
+    sim.step(1)
+    eff = sim.joint_state().effort[sim.indices(["torso_yaw", "l_elbow"])]
+    np.testing.assert_allclose(eff, [1.5, -20.0])
+    assert sim.commanded[sim.indices(["torso_yaw", "l_elbow"])].all()
+    assert sim.commanded.sum() == 2
+
+
+@pytest.mark.parametrize("names,efforts,match", [
+    (["l_elbow", "nose"], [1.0, 2.0], "nose"),
+    (["l_elbow"], [float("nan")], "NaN"),
+    (["l_elbow"], [float("inf")], "NaN or infinite"),
+    (["l_elbow", "r_elbow"], [1.0], "2 names but 1"),
+    (["l_elbow", "l_elbow"], [1.0, 1.0], "duplicate"),
+])
+def test_bad_command_rejected_and_nothing_changes(sim, names, efforts, match):
+    """Unknown names, NaN/inf or mismatched lengths raise a clear error and leave the previous
+    command in force."""
+    sim.reset("rest")
+    sim.command(["l_elbow"], [2.0])
+    with pytest.raises(InvalidInput, match=match):
+        sim.command(names, efforts)
+    sim.step(1)
+    assert sim.joint_state().effort[sim.indices(["l_elbow"])[0]] == pytest.approx(2.0)
+
+
+def test_command_all_fast_path(sim):
+    """command_all takes a full (n,) vector in joint_names order, saturated; wrong shapes
+    and NaN are rejected."""
+    sim.reset("rest")
+    tau = np.full(sim.n, 100.0)
+    out = sim.command_all(tau)
+    np.testing.assert_allclose(out, sim.torque_limits)
+    with pytest.raises(InvalidInput):
+        sim.command_all(np.zeros(3))
+    with pytest.raises(InvalidInput):
+        sim.command_all(np.full(sim.n, np.nan))
+
+
+def test_limit_torques_stay_stable(sim):
+    """One second at saturated torques on every joint (into the joint limits) keeps the state
+    finite and the joints within their limits plus a small penetration."""
+    sim.reset("rest")
+    sim.command_all(np.where(np.arange(sim.n) % 2 == 0, 1e3, -1e3))
+    sim.step(1000)
+    st = sim.joint_state()
+    assert np.all(np.isfinite(st.position)) and np.all(np.isfinite(st.velocity))
+    assert np.all(st.position > sim.lower - 0.05) and np.all(st.position < sim.upper + 0.05)
+
+
+def test_gravity_without_hold_falls(sim):
+    """With zero commanded torque the arms fall under gravity (the hold is really released)."""
+    sim.reset("rest")
+    i = sim.indices(["l_shoulder_pitch"])[0]
+    q0 = sim.joint_state().position[i]
+    sim.command_all(np.zeros(sim.n))
+    sim.step(300)
+    assert sim.joint_state().position[i] > q0 + 0.05  # the forearm swings down (pitch +)
+
+
+def test_object_pose_and_errors(sim):
+    """set_object_pose teleports an object (at rest); unknown objects, NaN and zero
+    quaternions are rejected."""
+    sim.reset("rest")
+    sim.set_object_pose("cylinder", [-0.55, -0.3, -0.03], [1.0, 0.0, 0.0, 0.0])
+    np.testing.assert_allclose(sim.object_pose("cylinder").position, [-0.55, -0.3, -0.03])
+    sim.step(200)
+    np.testing.assert_allclose(sim.object_pose("cylinder").position, [-0.55, -0.3, -0.03],
+                               atol=2e-3)  # standing on the table top (z = -0.09)
+    with pytest.raises(UnknownName, match="box"):
+        sim.set_object_pose("ball", [0, 0, 0])
+    with pytest.raises(InvalidInput):
+        sim.set_object_pose("box", [np.nan, 0, 0])
+    with pytest.raises(InvalidInput):
+        sim.set_object_pose("box", [0, 0, 0], [0, 0, 0, 0])
+    sim.reset("rest")
+    np.testing.assert_allclose(sim.object_pose("cylinder").position,
+                               sim.config.cylinder_position, atol=1e-9)
+
+
+def test_apply_wrench_moves_object_and_validates(sim):
+    """A scripted upward force larger than the box's weight lifts it; bad targets, NaN and
+    non-positive durations are rejected."""
+    sim.reset("rest")
+    z0 = sim.object_pose("box").position[2]
+    sim.apply_wrench("box", [0.0, 0.0, 2 * sim.config.box_mass * 9.81], [0, 0, 0], 0.2)
+    sim.step(200)
+    assert sim.object_pose("box").position[2] > z0 + 0.05
+    with pytest.raises(UnknownName):
+        sim.apply_wrench("no_such_frame", [0, 0, 1], [0, 0, 0], 1.0)
+    with pytest.raises(InvalidInput):
+        sim.apply_wrench("box", [0, np.nan, 1], [0, 0, 0], 1.0)
+    with pytest.raises(InvalidInput):
+        sim.apply_wrench("box", [0, 0, 1], [0, 0, 0], 0.0)
+
+
+def test_reset_keeps_time_monotonic(sim):
+    """A reset does not rewind simulated time (/clock never goes back)."""
+    sim.step(10)
+    t = sim.time
+    sim.reset("zero")
+    assert sim.time == t
+    with pytest.raises(UnknownName):
+        sim.reset("dance")
