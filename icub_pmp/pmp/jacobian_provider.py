@@ -82,7 +82,7 @@ class JacobianProvider(abc.ABC):
         frames: Sequence[str],
         forces: np.ndarray,
         gravity: bool,
-        joints: Sequence[int] | None = None,
+        joints: Sequence[int] | np.ndarray | None = None,
     ) -> np.ndarray:
         """d(static_torques)/dq_j (nq, len(joints)) [N m/rad] for the joint indices ``joints``
         (default all); central finite differences of :meth:`static_torques`."""

@@ -41,6 +41,8 @@ class JointLimitField:
             a.setflags(write=False)
         self.alpha = float(alpha)
         self.eps = float(eps)
+        self._inv_range = 1.0 / self.range
+        self._alpha_inv_range = self.alpha * self._inv_range
 
     def normalised(self, q: np.ndarray) -> np.ndarray:
         """lambda (n,) in [eps, 1 - eps]: the normalised joint angle of eq 6."""
@@ -58,9 +60,9 @@ class JointLimitField:
 
     def torques_and_stiffness(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(:meth:`torques`, :meth:`stiffness`) with one evaluation of lambda."""
-        lam = self.normalised(q)
+        lam = np.minimum(np.maximum((q - self.lower) * self._inv_range, self.eps), 1.0 - self.eps)
         mu = 1.0 - lam
-        return self.alpha * np.log(mu / lam), self.alpha / (lam * mu * self.range)
+        return self.alpha * np.log(mu / lam), self._alpha_inv_range / (lam * mu)
 
     def potential(self, q: np.ndarray) -> float:
         """Potential U with T = -dU/dq [J] (convex; minimum at mid-range)."""

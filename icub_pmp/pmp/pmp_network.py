@@ -16,7 +16,7 @@ The relaxation (:mod:`relaxation`) then integrates ``z' = A (G^T F + T_int)``.
 
 from __future__ import annotations
 
-from typing import Mapping, NamedTuple, Sequence
+from typing import Mapping, NamedTuple, Sequence, cast
 
 import numpy as np
 
@@ -136,7 +136,7 @@ class PmpNetwork:
         for h in self.hands:
             if h in coupled:
                 rows.append(("grasp", h, r))
-                blocks.append(np.eye(3) * self.held_object.grasp_stiffness)
+                blocks.append(np.eye(3) * cast(HeldObject, self.held_object).grasp_stiffness)
             else:
                 rows.append(("position", h, r))
                 blocks.append(self.targets[h].jacobian)
@@ -254,7 +254,8 @@ class PmpNetwork:
             g = np.zeros((self.m, self.nz))
             force = np.empty(self.m)
             rot_err = np.zeros(k)
-            obj = z[self.n:] if self.held_object is not None else None
+            ho = cast(HeldObject, self.held_object)  # only read by grasp/object rows
+            obj = z[self.n:]
             for kind, hand, r0 in self._rows:
                 i = self.hands.index(hand) if hand else -1
                 if kind == "position":
@@ -268,15 +269,12 @@ class PmpNetwork:
                 elif kind == "grasp":  # task value y = x_i - x_o, target r_i
                     g[r0:r0 + 3, : self.n] = jac[i, :3]
                     g[r0:r0 + 3, self.n:] = -np.eye(3)
-                    r_i = self.held_object.grasp_offsets[hand]
-                    force[r0:r0 + 3] = self.held_object.grasp_stiffness * (
-                        r_i - (pos[i] - obj)
+                    force[r0:r0 + 3] = ho.grasp_stiffness * (
+                        ho.grasp_offsets[hand] - (pos[i] - obj)
                     )
                 else:  # object goal: task value y = x_o
                     g[r0:r0 + 3, self.n:] = np.eye(3)
-                    force[r0:r0 + 3] = self.held_object.goal_stiffness * (
-                        self.held_object.goal - obj
-                    )
+                    force[r0:r0 + 3] = ho.goal_stiffness * (ho.goal - obj)
             force = force * self._row_gain
         clearance = np.inf
         if self.obstacles:

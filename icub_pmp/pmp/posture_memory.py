@@ -41,7 +41,7 @@ class PostureMemory:
     def __init__(
         self,
         provider: JacobianProvider,
-        joint_index: Sequence[int],
+        joint_index: Sequence[int] | np.ndarray,
         frames: Sequence[str],
         q_base: np.ndarray,
         lower: np.ndarray,

@@ -182,7 +182,9 @@ class Relaxation:
         if converged:
             reason = "converged"
         frac = cfg.boundary_fraction
+        flo, fhi = frac * lo, frac * hi
         tol, rot_tol = cfg.tolerance, cfg.rotation_tolerance
+        adaptive = cfg.max_displacement > 0
         step = 0
         while not converged and step < cfg.max_steps:
             step += 1
@@ -195,16 +197,17 @@ class Relaxation:
                 y = _solve(eye + (gb @ jac.T) @ kmat, gb @ g)
                 dz = bmat * g - gb.T @ (kmat @ y)
                 # per-joint fraction to the boundary: limits are never reached
-                zj = z[:n]
-                dz[:n] = np.minimum(np.maximum(dz[:n], frac * (lo - zj)), frac * (hi - zj))
+                fz = frac * z[:n]
+                dz[:n] = np.minimum(np.maximum(dz[:n], flo - fz), fhi - fz)
                 z_new = z + dz
                 new_state = network.evaluate(z_new, s + h)
                 if not network.obstacles or new_state.clearance > 0.0:
                     break
                 h *= 0.5
-            dx = new_state.hand_positions - state.hand_positions
-            moved = float(np.sqrt((dx * dx).sum(axis=1)).max()) + 0.1 * float(
-                np.abs(new_state.rotation_errors - state.rotation_errors).max(initial=0.0))
+            if adaptive:
+                dx = new_state.hand_positions - state.hand_positions
+                moved = float(np.sqrt((dx * dx).sum(axis=1)).max()) + 0.1 * float(
+                    np.abs(new_state.rotation_errors - state.rotation_errors).max(initial=0.0))
             z, state, s = z_new, new_state, s + h
             s_nodes.append(s)
             z_nodes.append(z)
@@ -223,7 +226,7 @@ class Relaxation:
             elif step - best_step >= cfg.stall_steps:
                 reason = "stalled"
                 break
-            if cfg.max_displacement > 0:  # step control on the hands' motion
+            if adaptive:  # step control on the hands' motion
                 want = min(cfg.max_displacement, worst)
                 ratio = want / moved if moved > 0 else cfg.step_growth
                 h = min(h * min(max(ratio, 0.5), cfg.step_growth), cfg.max_step)
