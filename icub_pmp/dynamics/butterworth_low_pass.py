@@ -53,7 +53,10 @@ class ButterworthLowPass:
         return v
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
-        """Filter one sample ``x`` (n,) and return the output (n,) (a new array)."""
+        """Filter one sample ``x`` (n,) and return the output (n,) (a new array).
+
+        The output is kept as the state, so a caller that modifies it must copy it first.
+        """
         x = np.asarray(x, dtype=float)
         if not self.enabled:
             self._y = x.copy()
@@ -65,4 +68,4 @@ class ButterworthLowPass:
         z[0] = b[1] * x - a[1] * y + z[1]
         z[1] = b[2] * x - a[2] * y
         self._y = y
-        return y.copy()
+        return y

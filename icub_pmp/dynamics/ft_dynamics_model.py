@@ -86,6 +86,7 @@ class FtDynamicsModel:
         for _ in range(self.model.njoints):
             self._fext.append(pin.Force.Zero())
         self._ft_ids = [(h, j) for h, j in self._ft_joint.items()]
+        self._shift = pin.SE3.Identity()  # translation-only frame at the hand origin
         # joint-local placement of each hand frame (to apply hand wrenches as f_ext)
         self._hand_in_joint = {
             h: self.model.frames[f].placement for h, f in self._hand_frame.items()
@@ -175,9 +176,21 @@ class FtDynamicsModel:
         :meth:`rnea` or :meth:`forward` call."""
         if hand not in self._hand_frame:
             raise UnknownName("hand", hand, HANDS)
-        o_s = pin.updateFramePlacement(self.model, self.data, self._sensor_frame[hand])
-        o_h = pin.updateFramePlacement(self.model, self.data, self._hand_frame[hand])
-        return o_s.actInv(o_h), o_h.copy()
+        o_mi = self.data.oMi
+        o_h = o_mi[self._hand_joint[hand]] * self._hand_in_joint[hand]
+        # the sensor frame is the FT joint's frame (at q = 0)
+        return o_mi[self._ft_joint[hand]].actInv(o_h), o_h
+
+    def sensor_wrench_to_hand(self, hand: str, w_sensor: np.ndarray
+                              ) -> tuple[np.ndarray, np.ndarray]:
+        """Move a wrench (6,) given in the FT sensor frame about its origin to the hand frame
+        origin: returns it in hand-frame axes and in root_link axes (eq 2's change of
+        coordinates), for the configuration of the last :meth:`rnea` or :meth:`forward`."""
+        o_mi = self.data.oMi
+        o_h = o_mi[self._hand_joint[hand]] * self._hand_in_joint[hand]
+        f_root = o_mi[self._ft_joint[hand]].act(pin.Force(w_sensor))  # about the root origin
+        self._shift.translation = o_h.translation
+        return o_h.actInv(f_root).vector, self._shift.actInv(f_root).vector
 
     def forward(self, q: np.ndarray) -> None:
         """Forward kinematics for ``q`` (nq,) [rad] (frames updated)."""

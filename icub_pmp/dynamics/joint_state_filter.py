@@ -54,8 +54,8 @@ class JointStateFilter:
         self._fa.reset()
 
     def update(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> FilteredState:
-        """Add a sample at time ``t`` [s]; returns the filtered state (arrays owned by the
-        caller).
+        """Add a sample at time ``t`` [s]; returns the filtered state (read it, do not modify
+        it).
 
         A sample not later than the previous one is ignored (the last state is returned).
         """
@@ -72,8 +72,8 @@ class JointStateFilter:
         if dt <= 0.0:
             return FilteredState(self._q.copy(), self._v.copy(), self._a.copy())
         raw_v = (q - self._q) / dt if v is None else np.asarray(v, dtype=float)
-        v_f = self._fv(raw_v)
+        v_f = self._fv(raw_v) if self._fv.enabled else raw_v.copy()
         self._a = self._fa((v_f - self._v) / dt)
         self._v = v_f
         self._q, self._t = q.copy(), float(t)
-        return FilteredState(self._q.copy(), self._v.copy(), self._a.copy())
+        return FilteredState(self._q, v_f, self._a)

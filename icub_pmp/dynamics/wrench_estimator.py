@@ -163,7 +163,7 @@ class WrenchEstimator:
         x = np.asarray(x, dtype=float)
         if x.shape != (self.nq,):
             raise InvalidInput(f"{name}: expected shape ({self.nq},), got {x.shape}")
-        if not math.isfinite(float(x.sum())):
+        if not math.isfinite(x @ x):
             raise InvalidInput(f"{name}: contains NaN or infinite values")
         return x
 
@@ -195,6 +195,7 @@ class WrenchEstimator:
         q = self._check(q, "q")
         if v is not None:
             v = self._check(v, "v")
+        sign = self._sign
         meas = {}
         for h in HANDS:
             try:
@@ -203,7 +204,8 @@ class WrenchEstimator:
                 raise InvalidInput(f"ft: missing the {h} arm wrench (need {HANDS})") from None
             if w.shape != (6,) or not math.isfinite(float(w.sum())):
                 raise InvalidInput(f"ft[{h!r}]: expected 6 finite values, got {w!r}")
-            meas[h] = self._sign * self._ft_filter[h](w)  # -> parent_on_child
+            f = self._ft_filter[h]
+            meas[h] = sign * (f(w) if f.enabled else w)  # -> parent_on_child
         cfg = self.config
         if cfg.gravity_source == "imu":
             if imu_acc is None:
@@ -238,12 +240,8 @@ class WrenchEstimator:
         pin.forwardKinematics(model.model, model.data, model._q)
         ext_hand, ext_root = {}, {}
         for h in HANDS:
-            diff = pin.Force(meas[h] - w_int[h])  # = -(external wrench) at the sensor
-            t_sh, t_rh = model.hand_placements(h)
-            w_e = -t_sh.actInv(diff).vector
-            ext_hand[h] = w_e
-            r = t_rh.rotation
-            ext_root[h] = np.concatenate((r @ w_e[:3], r @ w_e[3:]))
+            # w_i - w_s = the external wrench, at the sensor; moved to the hand
+            ext_hand[h], ext_root[h] = model.sensor_wrench_to_hand(h, w_int[h] - meas[h])
 
         # joint torques with the estimated hand wrenches (eq 3 folded into RNEA)
         tau = model._rnea_loaded(ext_hand)
@@ -265,7 +263,7 @@ class WrenchEstimator:
             ext_hand=ext_hand,
             ext_root=ext_root,
             contact=contact,
-            ft_measured={h: self._sign * meas[h] for h in HANDS},
-            ft_predicted={h: self._sign * w_int[h] for h in HANDS},
+            ft_measured={h: sign * meas[h] for h in HANDS},
+            ft_predicted={h: sign * w_int[h] for h in HANDS},
             state=state,
         )

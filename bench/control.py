@@ -1,0 +1,168 @@
+"""Benchmark of the 1 kHz joint controller (issue 5): lockstep real-time factor, controller
+compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
+
+    scripts/env.sh python bench/control.py --quick     # < 2 min
+    scripts/env.sh python bench/control.py             # longer RTF window
+
+1. In-process (one Python process, no DDS): the simulator alone stepping 1 ms (baseline), then
+   SimLoop = simulator + wrench estimator + impedance controller in lockstep; per-step compute
+   time of the controller (perf_counter around ImpedanceController.step, median) and of the
+   estimator; the real-time factor of both (simulated s / wall s).
+2. Tracking: position mode with inverse-dynamics feed-forward and the torque loop closed on
+   the estimated torques; 7 joints (torso yaw, right arm 6, left elbow) follow a 2 s
+   minimum-jerk move sent as 40 points with velocities (as a planner does). RMS error during
+   the 2 s and the final error 0.3 s after, over all 7 joints [deg].
+3. Over DDS: sim_bridge (lockstep, cameras off, IMU and ground truth every 10 steps) +
+   wrench_estimator (side topics every 10 samples) + impedance_controller (use_sim_time) as
+   subprocesses started through their scripts in a private ROS domain; the lockstep real-time
+   factor from /clock over a wall-clock window.
+
+The machine is shared: wall-clock figures depend on its load (printed at start and end).
+Ends with one JSON line: lockstep_rtf (DDS), controller_us_median, tracking_rms_deg,
+tracking_final_deg, and the in-process figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
+from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
+from icub_sim_bridge.sim_config import SimConfig  # noqa: E402
+from icub_sim_bridge.simulator import Simulator  # noqa: E402
+
+
+def _load() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def bench_inprocess(sim: Simulator, seconds: float) -> dict:
+    """Sim-only baseline vs the full in-process loop; per-step compute times."""
+    sim.reset("rest")
+    n = int(seconds * 1000)
+    t0 = time.perf_counter()
+    sim.step(n)
+    sim_rtf = n * 1e-3 / (time.perf_counter() - t0)
+    sim.reset("rest")
+    loop = SimLoop(ImpedanceControllerConfig(mode="impedance"), sim=sim)
+    loop.run(0.05)
+    loop.record_timing = True
+    t0 = time.perf_counter()
+    loop.run(seconds)
+    wall = time.perf_counter() - t0
+    tm = {k: np.array(v) * 1e6 for k, v in loop.timing.items()}
+    return {
+        "sim_only_rtf": sim_rtf,
+        "inprocess_rtf": seconds / wall,
+        "controller_us_median": float(np.median(tm["controller"])),
+        "controller_us_p95": float(np.percentile(tm["controller"], 95)),
+        "estimator_us_median": float(np.median(tm["estimator"])),
+        "sim_step_us_median": float(np.median(tm["sim"])),
+    }
+
+
+def _min_jerk(q0, q1, T, t):
+    s = np.clip(t / T, 0.0, 1.0)
+    return (q0 + (q1 - q0) * (10 * s**3 - 15 * s**4 + 6 * s**5),
+            (q1 - q0) * (30 * s**2 - 60 * s**3 + 30 * s**4) / T)
+
+
+def bench_tracking(sim: Simulator) -> dict:
+    """2 s minimum-jerk joint move in position mode (the test's trajectory)."""
+    sim.reset("rest")
+    loop = SimLoop(ImpedanceControllerConfig(mode="position", feedforward="inverse_dynamics"),
+                   sim=sim)
+    loop.run(0.05)
+    c = loop.controller
+    names = ["torso_yaw", "r_shoulder_pitch", "r_shoulder_roll", "r_shoulder_yaw", "r_elbow",
+             "r_wrist_prosup", "l_elbow"]
+    idx = c.indices(names)
+    q0 = sim.joint_state().position[idx].copy()
+    q1 = q0 + np.radians([20, -30, 20, 25, 35, 30, 20])
+    ts = np.arange(1, 41) * 0.05
+    pos = np.array([_min_jerk(q0, q1, 2.0, t)[0] for t in ts])
+    vel = np.array([_min_jerk(q0, q1, 2.0, t)[1] for t in ts])
+    t0 = loop.t
+    c.set_trajectory(c.make_trajectory(names, ts, pos, vel, start=t0), t0)
+    steps = loop.run(2.3)
+    err = np.array([s.q[idx] - _min_jerk(q0, q1, 2.0, s.t - t0)[0] for s in steps])
+    moving = err[:2000]
+    return {
+        "tracking_rms_deg": float(np.degrees(np.sqrt(np.mean(moving**2)))),
+        "tracking_max_deg": float(np.degrees(np.abs(moving).max())),
+        "tracking_final_deg": float(np.degrees(np.abs(err[-1]).max())),
+        "tracking_saturated_steps": int(sum(s.control.saturated.any() for s in steps)),
+    }
+
+
+def bench_dds(window: float) -> dict:
+    """Lockstep real-time factor of sim_bridge + wrench_estimator + impedance_controller."""
+    from rosgraph_msgs.msg import Clock
+
+    from icub_pmp.testing import NodeGraph, RosProbe, reserve_domain_id, ros_environment
+
+    params = {
+        "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10,
+                       "ground_truth_decimation": 10},
+        "wrench_estimator": {"use_sim_time": True, "publish_every": 10},
+        "impedance_controller": {"use_sim_time": True},
+    }
+    with reserve_domain_id() as did:
+        with NodeGraph(["sim_bridge", "wrench_estimator", "impedance_controller"], params,
+                       env=ros_environment(did)) as g:
+            probe = RosProbe(did, "bench_control")
+            try:
+                if not (probe.wait_for_topic("/effort_command", 90)
+                        and probe.wait_for_topic("/estimated_joint_torques", 90)):
+                    raise RuntimeError("graph did not come up:\n" + g.outputs())
+
+                def sim_t() -> float:
+                    c = probe.collect("/clock", Clock, 1, 30.0)[0]
+                    return c.clock.sec + c.clock.nanosec * 1e-9
+
+                time.sleep(2.0)  # warm-up
+                s0, w0 = sim_t(), time.perf_counter()
+                time.sleep(window)
+                s1, w1 = sim_t(), time.perf_counter()
+                timeouts = g.procs["sim_bridge"].output().count("lockstep: no /effort_command")
+            finally:
+                probe.close()
+    return {"lockstep_rtf": (s1 - s0) / (w1 - w0), "dds_window_s": w1 - w0,
+            "lockstep_timeout_warnings": timeouts}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="short windows (< 2 min)")
+    args = ap.parse_args()
+    inproc_s = 3.0 if args.quick else 10.0
+    window = 15.0 if args.quick else 60.0
+    load0 = _load()
+    print(f"load average at start: {load0} (2 cores, shared machine)", file=sys.stderr)
+    sim = Simulator(SimConfig(cameras_enabled=False))
+    out: dict = {}
+    out.update(bench_inprocess(sim, inproc_s))
+    print(f"in-process: {out}", file=sys.stderr)
+    out.update(bench_tracking(sim))
+    print(f"tracking: rms {out['tracking_rms_deg']:.4f} deg, final "
+          f"{out['tracking_final_deg']:.4f} deg", file=sys.stderr)
+    out.update(bench_dds(window))
+    out["load_start"] = load0
+    out["load_end"] = _load()
+    print(json.dumps({k: (round(v, 4) if isinstance(v, float) else v) for k, v in out.items()}))
+
+
+if __name__ == "__main__":
+    main()
