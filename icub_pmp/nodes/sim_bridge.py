@@ -20,10 +20,15 @@ possible) or ``lockstep``: after publishing the state stamped t, the next step w
 ``lockstep_timeout`` s of wall time) for an /effort_command stamped exactly t; on timeout it
 steps with the last valid command and warns (throttled).
 
-Threads: the physics loop runs on the main thread and is the only one touching MuJoCo;
-callbacks run on an ``EventsExecutor`` thread: the effort callback validates and hands the
-command over, service handlers queue a request that the loop executes between two steps and
-wait for its answer (synchronous handlers). Cameras render on their own worker thread.
+Threads: the physics loop runs on its own thread and is the only one touching MuJoCo; the
+``EventsExecutor`` spins on the main thread (``spin_once`` in a loop: the Jazzy wheel's
+``spin()`` ignores SIGINT): the effort callback validates and hands the command over, service
+handlers queue a request that the physics loop executes between two steps and wait for its
+answer (synchronous handlers). Cameras render on their own worker thread.
+
+Before a joint is first named in an effort command (and after each reset) the simulator holds
+it at its posture (``Simulator`` doc); the state published before a lockstep controller
+subscribed goes unanswered: the loop steps on after ``lockstep_timeout``.
 """
 
 from __future__ import annotations

@@ -1,0 +1,66 @@
+"""The sim_bridge node in lockstep over real DDS: each step waits for the /effort_command
+stamped like the state it answers (its own module: no other sim_bridge in the domain)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import JointState
+
+from icub_pmp.config import config_dir
+from icub_pmp.testing import NodeProcess, ros_environment
+
+
+def _ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def _start(domain: int, **params) -> NodeProcess:
+    return NodeProcess("sim_bridge", env=ros_environment(domain),
+                       params_file=config_dir() / "sim_bridge.yaml", parameters=params)
+
+
+def _wait_up(probe, proc: NodeProcess) -> None:
+    assert probe.wait_for_topic("/joint_states", timeout=60.0), proc.output()[-3000:]
+
+
+def test_lockstep_waits_for_the_answer(ros_domain_id, ros_probe):
+    """In lockstep each state is followed by the next one (1 ms later) only after an
+    /effort_command stamped like it arrives: 30 answered states give 30 consecutive steps,
+    and without an answer the simulation waits."""
+    proc = _start(ros_domain_id, cameras_enabled=False, mode="lockstep",
+                  lockstep_timeout=3.0)
+    try:
+        _wait_up(ros_probe, proc)
+        node = ros_probe.node
+        pub = node.create_publisher(JointState, "/effort_command", qos_profile_sensor_data)
+        assert ros_probe.wait_for(lambda: pub.get_subscription_count() > 0, 30.0)
+        seen: list[int] = []
+        answer = {"left": 30}
+
+        def cb(msg: JointState) -> None:
+            seen.append(_ns(msg.header.stamp))
+            if answer["left"] > 0:
+                answer["left"] -= 1
+                out = JointState(name=["torso_yaw"], effort=[0.0])
+                out.header.stamp = msg.header.stamp
+                pub.publish(out)
+
+        # the states published before we subscribed go unanswered: the node steps on after
+        # each timeout (3 s) until our answers take over
+        sub = node.create_subscription(JointState, "/joint_states", cb, qos_profile_sensor_data)
+        assert ros_probe.wait_for(lambda: answer["left"] == 0 and len(seen) >= 30, 30.0), \
+            proc.output()[-2000:]
+        time.sleep(0.5)
+        n = len(seen)
+        time.sleep(0.5)
+        assert len(seen) == n  # no answer, no step (within the 3 s timeout)
+        d = np.diff(sorted(set(seen)))
+        assert np.all(d == 1_000_000)
+        node.destroy_subscription(sub)
+        node.destroy_publisher(pub)
+    finally:
+        rc = proc.stop()
+        assert rc == 0, proc.output()[-3000:]

@@ -1,0 +1,159 @@
+"""The sim_bridge node over real DDS (node as a subprocess, started as a user does): streams
+every 1 ms of sim time, cameras at 30 Hz, bad commands rejected while the node keeps running,
+services, lockstep."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+from geometry_msgs.msg import Pose, PoseStamped, WrenchStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
+from std_srvs.srv import SetBool
+
+from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
+from icub_pmp.config import config_dir
+from icub_pmp.kinematics import RobotSpec
+from icub_pmp.testing import NodeProcess, ros_environment
+
+CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def _ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def _start(domain: int, **params) -> NodeProcess:
+    return NodeProcess("sim_bridge", env=ros_environment(domain),
+                       params_file=config_dir() / "sim_bridge.yaml", parameters=params)
+
+
+@pytest.fixture(scope="module")
+def bridge(ros_domain_id):
+    proc = _start(ros_domain_id, cameras_enabled=True)
+    try:
+        yield proc
+    finally:
+        rc = proc.stop()
+        assert rc == 0, proc.output()[-3000:]
+
+
+def _wait_up(probe, proc: NodeProcess) -> None:
+    assert probe.wait_for_topic("/joint_states", timeout=60.0), proc.output()[-3000:]
+
+
+def test_joint_states_and_ft_every_step(bridge, ros_probe):
+    """/joint_states (23 URDF joint names, position/velocity/effort) and /ft/l_arm_ft arrive
+    every 1 ms of simulated time (consecutive stamps 1 ms apart); /clock runs."""
+    _wait_up(ros_probe, bridge)
+    js = ros_probe.collect("/joint_states", JointState, 200)
+    assert len(js) == 200, bridge.output()[-2000:]
+    assert tuple(js[-1].name) == RobotSpec.load().actuated_joints
+    assert len(js[-1].position) == len(js[-1].velocity) == len(js[-1].effort) == 23
+    d = np.diff([_ns(m.header.stamp) for m in js])
+    assert np.median(d) == 1_000_000 and np.all(d % 1_000_000 == 0)
+    ft = ros_probe.collect("/ft/l_arm_ft", WrenchStamped, 100)
+    assert len(ft) == 100 and ft[0].header.frame_id == "l_arm_ft"
+    assert np.median(np.diff([_ns(m.header.stamp) for m in ft])) == 1_000_000
+    clock = ros_probe.collect("/clock", Clock, 20, qos=CLOCK_QOS)
+    assert _ns(clock[-1].clock) > _ns(clock[0].clock)
+    for topic, typ in (("/ft/r_arm_ft", WrenchStamped), ("/ft/l_leg_ft", WrenchStamped),
+                       ("/ft/r_leg_ft", WrenchStamped), ("/imu", Imu),
+                       ("/ground_truth/contact_wrench/left_hand", WrenchStamped),
+                       ("/ground_truth/objects/box", PoseStamped)):
+        assert len(ros_probe.collect(topic, typ, 3)) == 3, topic
+
+
+def test_cameras_at_30hz(bridge, ros_probe):
+    """Both cameras publish rgb8 320x240 images 1/30 s of sim time apart, with CameraInfo
+    fx = fy = 343.12, cx = 160, cy = 120 in the optical frames."""
+    _wait_up(ros_probe, bridge)
+    for side, frame in (("left", "l_eye_optical"), ("right", "r_eye_optical")):
+        imgs = ros_probe.collect(f"/cam/{side}/image_raw", Image, 4, timeout=30.0)
+        assert len(imgs) == 4
+        m = imgs[-1]
+        assert (m.width, m.height, m.encoding, m.step, len(m.data)) == (
+            320, 240, "rgb8", 960, 320 * 240 * 3)
+        assert m.header.frame_id == frame
+        d = np.diff([_ns(i.header.stamp) for i in imgs]) / 1e9
+        assert np.min(d) == pytest.approx(1 / 30, abs=1.1e-3)
+        info = ros_probe.collect(f"/cam/{side}/camera_info", CameraInfo, 1)[0]
+        assert list(info.k) == [343.12, 0.0, 160.0, 0.0, 343.12, 120.0, 0.0, 0.0, 1.0]
+        assert info.header.frame_id == frame
+
+
+def _effort(probe, joint: str) -> float:
+    msg = probe.collect("/joint_states", JointState, 1)[0]
+    return msg.effort[list(msg.name).index(joint)]
+
+
+def test_bad_commands_rejected_node_keeps_running(bridge, ros_probe):
+    """Effort commands with an unknown name, NaN, inf or mismatched lengths are dropped with a
+    warning and change nothing; the node keeps running and then applies a valid command,
+    saturated at the torque limit (l_elbow: 20 N m)."""
+    _wait_up(ros_probe, bridge)
+    from rclpy.qos import qos_profile_sensor_data
+
+    pub = ros_probe.node.create_publisher(JointState, "/effort_command",
+                                          qos_profile_sensor_data)
+    assert ros_probe.wait_for(lambda: pub.get_subscription_count() > 0, 30.0)
+    bad = [
+        JointState(name=["l_elbow", "nose"], effort=[1.0, 2.0]),
+        JointState(name=["l_elbow"], effort=[math.nan]),
+        JointState(name=["l_elbow"], effort=[math.inf]),
+        JointState(name=["l_elbow", "r_elbow"], effort=[1.0]),
+        JointState(name=[], effort=[]),
+    ]
+    before = _effort(ros_probe, "r_elbow")
+    for _ in range(3):
+        for m in bad:
+            pub.publish(m)
+        time.sleep(0.05)
+    assert bridge.wait_for_output("rejected", 10.0), bridge.output()[-2000:]
+    assert bridge.alive()
+    assert _effort(ros_probe, "r_elbow") == pytest.approx(before, abs=0.5)  # still held
+    ok = JointState(name=["l_elbow"], effort=[100.0])
+    assert ros_probe.wait_for(lambda: (pub.publish(ok), _effort(ros_probe, "l_elbow"))[1]
+                              == 20.0, 20.0)
+    assert bridge.alive()
+    resp = ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="rest"))
+    assert resp.success, resp.message
+    ros_probe.node.destroy_publisher(pub)
+
+
+def test_services(bridge, ros_probe):
+    """reset (a bad posture is refused with the valid names), set_object_pose (ground truth
+    follows; unknown objects refused), apply_wrench (ground-truth hand wrench shows it),
+    set_paused (the clock stops and resumes)."""
+    _wait_up(ros_probe, bridge)
+    r = ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="dance"))
+    assert not r.success and "rest" in r.message
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = -0.5, -0.2, -0.05
+    pose.orientation.w = 1.0
+    r = ros_probe.call("/sim/set_object_pose", SetObjectPose,
+                       SetObjectPose.Request(name="box", pose=pose))
+    assert r.success, r.message
+    gt = ros_probe.collect("/ground_truth/objects/box", PoseStamped, 5)[-1]
+    assert (gt.pose.position.x, gt.pose.position.y) == pytest.approx((-0.5, -0.2), abs=1e-3)
+    r = ros_probe.call("/sim/set_object_pose", SetObjectPose,
+                       SetObjectPose.Request(name="ball", pose=pose))
+    assert not r.success and "box" in r.message
+    req = ApplyWrench.Request(target="r_hand_dh_frame", duration=30.0)
+    req.wrench.force.z = -3.0
+    r = ros_probe.call("/sim/apply_wrench", ApplyWrench, req)
+    assert r.success, r.message
+    w = ros_probe.collect("/ground_truth/contact_wrench/right_hand", WrenchStamped, 5)[-1]
+    assert w.wrench.force.z == pytest.approx(-3.0, abs=1e-6)
+    r = ros_probe.call("/sim/apply_wrench", ApplyWrench,
+                       ApplyWrench.Request(target="nowhere", duration=1.0))
+    assert not r.success and "nowhere" in r.message
+    assert ros_probe.call("/sim/set_paused", SetBool, SetBool.Request(data=True)).success
+    assert ros_probe.collect("/joint_states", JointState, 1, timeout=1.0) == []  # paused
+    assert ros_probe.call("/sim/set_paused", SetBool, SetBool.Request(data=False)).success
+    assert len(ros_probe.collect("/joint_states", JointState, 5)) == 5
+    assert ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="")).success
