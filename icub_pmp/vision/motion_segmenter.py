@@ -80,6 +80,8 @@ class MotionSegmenter:
         self._prev_patches: np.ndarray | None = None
         self._prev_texture: np.ndarray | None = None
         self._ttl = np.zeros(self.grid_shape, np.int32)
+        self._ego_flow: np.ndarray | None = None
+        self._recent: list[np.ndarray] = []
         self._frame_index = -1
 
     # ------------------------------------------------------------------ main step
@@ -112,9 +114,10 @@ class MotionSegmenter:
             )
         failures, flow, disc, tracked = self._failures(self._prev_gray, gray)
         self._store(gray, patches)
-        kept = self._neighbour_filter(failures)
+        kept = self._confirm(self._neighbour_filter(failures))
         self._ttl = np.where(kept, c.frames_persistence, np.maximum(self._ttl - 1, 0))
         active = self._ttl > 0
+        self._ego_flow = None
         if c.grow_by_flow and active.any():
             moving, reliable = self._ego_residual(flow, tracked & ~failures)
             # persisted nodes now tracked like the background have left the object
@@ -122,7 +125,7 @@ class MotionSegmenter:
             self._ttl[left] = 0
             active &= ~left
             active = self._grow(active, moving)
-        labels, blobs = self._blobs(active, flow)
+        labels, blobs = self._blobs(active, self._displacement(flow, tracked & ~failures), flow)
         mask = self._mask(labels)
         return self._result(blobs, mask, failures, labels > 0, flow, disc)
 
@@ -223,6 +226,21 @@ class MotionSegmenter:
         counts = cv2.filter2D(f, -1, _NEIGHBOURS_8, borderType=cv2.BORDER_CONSTANT)
         return failures & (counts >= self.config.adj_nodes_thres - 0.5)
 
+    def _confirm(self, kept: np.ndarray) -> np.ndarray:
+        """Temporal confirmation: a kept failure counts only if kept failures were also found
+        within ``confirm_radius`` nodes of it in each of the previous ``confirm_frames - 1``
+        frames. Real motion makes LK fail frame after frame; a depth edge crossing a texture
+        under ego-motion makes it fail once."""
+        c = self.config
+        if c.confirm_frames <= 1:
+            return kept
+        out = kept.copy()
+        k = np.ones((2 * c.confirm_radius + 1, 2 * c.confirm_radius + 1), np.uint8)
+        for prev in self._recent:
+            out &= cv2.dilate(prev.astype(np.uint8), k).astype(bool)
+        self._recent = ([kept] + self._recent)[: c.confirm_frames - 1]
+        return out
+
     def _ego_residual(self, flow: np.ndarray, reliable: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
         """Nodes whose LK flow contradicts the ego-motion: (moving, reliable) grids.
@@ -237,6 +255,7 @@ class MotionSegmenter:
         none = np.zeros(self.grid_shape, bool)
         v = flow.reshape(-1, 2)
         ok = reliable.ravel()
+        self._ego_flow = None
         if ok.sum() < 8:
             return none, none
         src = self.nodes[ok]
@@ -244,6 +263,7 @@ class MotionSegmenter:
         if h is None:
             return none, none
         pred = cv2.perspectiveTransform(self.nodes[None], h)[0] - self.nodes
+        self._ego_flow = pred.reshape(rows, cols, 2)
         res = np.linalg.norm(np.nan_to_num(v - pred, nan=0.0), axis=1)
         moving = ((res >= c.flow_tol) & np.isfinite(v).all(axis=1)).reshape(rows, cols)
         return moving & ~self._border, reliable
@@ -273,8 +293,23 @@ class MotionSegmenter:
             grown = nxt
         return active | grown
 
-    def _blobs(self, active: np.ndarray, flow: np.ndarray) -> tuple[np.ndarray, list[MotionBlob]]:
-        """8-connected components of the ON nodes (holes filled), sorted by size."""
+    def _displacement(self, flow: np.ndarray, reliable: np.ndarray) -> np.ndarray:
+        """(rows, cols, 2) displacement from frame t to t+1 of each node's evidence: its LK
+        flow where tracking succeeded, else the ego-motion (homography) flow, else 0."""
+        rows, cols = self.grid_shape
+        if not self.config.warp_to_current:
+            return np.zeros((rows, cols, 2), np.float32)
+        base = self._ego_flow if self._ego_flow is not None else np.zeros((rows, cols, 2))
+        return np.where(reliable[:, :, None], np.nan_to_num(flow), base).astype(np.float32)
+
+    def _blobs(self, active: np.ndarray, disp: np.ndarray, flow: np.ndarray
+               ) -> tuple[np.ndarray, list[MotionBlob]]:
+        """8-connected components of the ON nodes (holes filled), sorted by size.
+
+        Returns the grid of blob ranks (0 = none, 1 = largest) and the blobs. The bounding
+        box covers the nodes' cells at their grid positions (as the mask); the centroid is
+        the mean of the nodes' positions in the current frame, ``p + disp``.
+        """
         c = self.config
         grid = active.astype(np.uint8)
         if c.fill_holes and grid.any():
@@ -283,37 +318,34 @@ class MotionSegmenter:
         s = c.grid_step
         x0, y0 = self.grid_origin
         half = s // 2
-        out: list[tuple[int, MotionBlob]] = []
+        out: list[MotionBlob] = []
         relabel = np.zeros(n, np.int32)
         candidates = [k for k in range(1, n) if stats[k, cv2.CC_STAT_AREA] > c.blob_min_size]
         candidates.sort(key=lambda k: -stats[k, cv2.CC_STAT_AREA])
         for rank, k in enumerate(candidates, start=1):
             relabel[k] = rank
             rr, cc = np.nonzero(labels == k)
-            u = x0 + cc * s
-            v = y0 + rr * s
-            fl = flow[rr, cc]
+            fl = flow[rr, cc].astype(np.float64)
             good = np.isfinite(fl).all(axis=1)
             mf = fl[good].mean(axis=0) if good.any() else np.zeros(2)
+            u, v = x0 + cc * s, y0 + rr * s
+            d = disp[rr, cc].astype(np.float64)
             size = int(rr.size)
             out.append(
-                (
-                    rank,
-                    MotionBlob(
-                        centroid=(float(u.mean()), float(v.mean())),
-                        size=size,
-                        area=size * s * s,
-                        bbox=(
-                            int(u.min() - half),
-                            int(v.min() - half),
-                            int(u.max() - half + s - 1),
-                            int(v.max() - half + s - 1),
-                        ),
-                        mean_flow=(float(mf[0]), float(mf[1])),
+                MotionBlob(
+                    centroid=(float((u + d[:, 0]).mean()), float((v + d[:, 1]).mean())),
+                    size=size,
+                    area=size * s * s,
+                    bbox=(
+                        int(u.min() - half),
+                        int(v.min() - half),
+                        int(u.max() - half + s - 1),
+                        int(v.max() - half + s - 1),
                     ),
+                    mean_flow=(float(mf[0]), float(mf[1])),
                 )
             )
-        return relabel[labels], [b for _, b in out]
+        return relabel[labels], out
 
     def _mask(self, labels: np.ndarray) -> np.ndarray:
         """Paint each ON node of a kept blob as a grid_step x grid_step cell (255), then

@@ -39,6 +39,11 @@ class MotionSegmenterConfig(ConfigBase):
             stays inside the image as a failure (the issue's "LK fails").
         adj_nodes_thres: a failing node is kept only if at least this many of its 8 grid
             neighbours also fail (isolated-failure filter, motionCUT ``adjNodesThres``).
+        confirm_frames: a kept failure counts only if there were kept failures near it
+            (``confirm_radius``) in each of the last ``confirm_frames - 1`` frames too
+            (1 = off, motionCUT; 2 = one frame of latency, no one-frame flashes).
+        confirm_radius: neighbourhood of the temporal confirmation [grid nodes]; must cover
+            the fastest object's image motion per frame.
         frames_persistence: a kept node stays ON this many frames (motionCUT).
         blob_min_size: blobs with at most this many nodes are discarded (motionCUT).
         grow_by_flow: extend failure blobs over adjacent tracked nodes whose LK flow differs
@@ -47,6 +52,10 @@ class MotionSegmenterConfig(ConfigBase):
             RANSAC tolerance of the ego-motion fit [px/frame].
         fill_holes: mark grid nodes enclosed by a blob as part of it (the interior of a
             uniformly textured object tracks well; only its border fails).
+        warp_to_current: blob centroids from the nodes' positions in the current frame:
+            ``p + v`` for nodes tracked without failure, ``p`` + the ego-motion flow for the
+            others (the grid is fixed in frame t, the result is about frame t+1). The mask
+            and bbox stay on the grid cells (motionCUT).
         mask_erosion: erosion of the output mask [px]: a node fails as soon as its window
             (half side ``win_size // 2``) reaches the object, so failure regions overhang the
             object by about that much.
@@ -76,13 +85,16 @@ class MotionSegmenterConfig(ConfigBase):
     lk_epsilon: float = 0.3
     theta_m: float = 40.0
     min_texture: float = 2.0
-    lk_status_is_failure: bool = True
+    lk_status_is_failure: bool = False
     adj_nodes_thres: int = 4
+    confirm_frames: int = 2
+    confirm_radius: int = 3
     frames_persistence: int = 3
     blob_min_size: int = 10
     grow_by_flow: bool = True
     flow_tol: float = 0.5
     fill_holes: bool = True
+    warp_to_current: bool = True
     mask_erosion: int = 7
     target_alpha: float = 0.5
     target_hold_frames: int = 10
@@ -122,6 +134,10 @@ class MotionSegmenterConfig(ConfigBase):
             raise bad("min_texture", ">= 0 grey levels")
         if not 0 <= self.adj_nodes_thres <= 8:
             raise bad("adj_nodes_thres", "0..8 neighbours")
+        if self.confirm_frames < 1:
+            raise bad("confirm_frames", ">= 1 frame")
+        if self.confirm_radius < 0:
+            raise bad("confirm_radius", ">= 0 nodes")
         if self.frames_persistence < 1:
             raise bad("frames_persistence", ">= 1 frame")
         if self.blob_min_size < 0:

@@ -56,6 +56,8 @@ class SequenceSpec:
         seed: phase of the target and head sweeps.
         amplitude: half range of the target's back-and-forth motion [m].
         head_sweep: half range of the head's back-and-forth rotation [deg].
+        lead_in: first frames without the target (hidden below the floor), so background
+            models (MOG2) can learn the scene; the target's motion starts at frame lead_in.
     """
 
     speed: float = 0.4
@@ -66,16 +68,19 @@ class SequenceSpec:
     seed: int = 0
     amplitude: float = 0.08
     head_sweep: float = 8.0
+    lead_in: int = 0
 
     def __post_init__(self) -> None:
         if self.direction not in DIRECTIONS:
             raise UnknownName("direction", self.direction, DIRECTIONS)
         if self.head_axis not in HEAD_AXES:
             raise UnknownName("head axis", self.head_axis, HEAD_AXES)
-        if self.speed < 0 or self.head_rate < 0 or self.n_frames < 1 or self.amplitude <= 0:
+        if (self.speed < 0 or self.head_rate < 0 or self.n_frames < 1 or self.amplitude <= 0
+                or self.lead_in < 0):
             raise InvalidInput(
-                f"SequenceSpec: need speed, head_rate >= 0, n_frames >= 1, amplitude > 0; got "
-                f"{self.speed}, {self.head_rate}, {self.n_frames}, {self.amplitude}"
+                f"SequenceSpec: need speed, head_rate, lead_in >= 0, n_frames >= 1, amplitude > 0;"
+                f" got {self.speed}, {self.head_rate}, {self.lead_in}, {self.n_frames}, "
+                f"{self.amplitude}"
             )
 
     @property
@@ -259,16 +264,17 @@ class SequenceGenerator:
         joint = "neck_yaw" if spec.head_axis == "yaw" else "neck_pitch"
         q[self._qadr[joint]] += head
         self.data.qpos[:] = q
-        if spec.direction == "none":
+        hidden = spec.direction == "none" or k < spec.lead_in
+        if hidden:
             pos = np.array([0.0, 0.0, -5.0])
         else:
             # motion axes from the head at rest (the object moves in the world, not with it)
             axis = self._axes[spec.direction]
-            s = triangle_wave(t, spec.speed, spec.amplitude, phase_t)
+            s = triangle_wave((k - spec.lead_in) / self.fps, spec.speed, spec.amplitude, phase_t)
             pos = np.array(FIXATION) + s * axis
         self.data.mocap_pos[self._mocap] = pos
         self._mj.mj_forward(self.model, self.data)
-        return pos if spec.direction != "none" else np.full(3, np.nan)
+        return np.full(3, np.nan) if hidden else pos
 
     @property
     def _axes(self) -> dict[str, np.ndarray]:
