@@ -8,11 +8,13 @@ cameras ``/cam/left|right/image_raw`` (rgb8 320x240, 30 Hz, sensor-data QoS),
 ``/joint_trajectory`` (reliable, 2 Hz) and reach requests: a ``/pmp/reach`` service with
 service introspection on (so ``/pmp/reach/_service_event`` carries every request and response)
 called by the same process at 2 Hz. Message ``k`` of a topic carries ``k`` (header stamp =
-``k`` ms of "sim time" for the 1 kHz topics, ``frame_id``/pixels for the others) so a test can
-check order and content (``--reliable``: every topic reliable with depth 1000, so DDS cannot
-drop; the default is the graph's QoS). It waits until every publisher has a subscriber
-(``--subscribers``), publishes for ``--duration`` s on an absolute 1 ms schedule, waits until
-its subscribers acknowledged every reliable sample, then prints ONE JSON line
+``k`` ms of "sim time" for the 1 kHz topics; the first pixel byte of image ``k`` is
+``k % 256``) so a test can check order and content. ``--reliable`` makes every topic reliable
+with depth 1000, so DDS cannot drop (the default is the graph's QoS).
+
+It waits until every publisher has a subscriber (``--subscribers``), publishes for
+``--duration`` s on an absolute 1 ms schedule, waits until its subscribers acknowledged every
+reliable sample, then prints ONE JSON line
 ``{"published": {topic: count}, "duration_s": ..., "late_ticks": ..., "acked": ...}``.
 """
 
@@ -24,6 +26,7 @@ import sys
 import threading
 import time
 
+import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
@@ -108,6 +111,12 @@ class TrafficNode(Node):
         for w, t in zip(ft, FT_TOPICS):
             w.header.frame_id = t.rsplit("/", 1)[1]
         images = []
+        # A smooth image with sensor noise (compresses about like a rendered frame; a
+        # constant image would make zstd look unrealistically good). Byte 0 carries the index.
+        rng = np.random.default_rng(0)
+        yy, xx = np.mgrid[0:HEIGHT, 0:WIDTH]
+        base = np.stack([xx * 255 // WIDTH, yy * 255 // HEIGHT, (xx + yy) % 256], axis=-1)
+        pixels = np.clip(base + rng.normal(0, 6, base.shape), 0, 255).astype(np.uint8).tobytes()
         for i, _ in enumerate(self.cam_pubs):
             im = Image(height=HEIGHT, width=WIDTH, encoding="rgb8", step=3 * WIDTH)
             im.header.frame_id = ("l_eye_optical", "r_eye_optical")[i]
@@ -137,7 +146,7 @@ class TrafficNode(Node):
                 n = k // 33
                 for pub, im in zip(self.cam_pubs, images):
                     im.header.stamp = stamp
-                    im.data = bytes([n % 256]) * (3 * WIDTH * HEIGHT)
+                    im.data = bytes([n % 256]) + pixels[1:]
                     self._pub(pub, im)
             if k % 500 == 250:
                 traj.header.stamp = stamp
