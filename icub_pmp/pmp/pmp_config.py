@@ -40,6 +40,7 @@ class PmpConfig(ConfigBase):
     trunk_admittance: tuple[float, ...] = (0.2, 0.2, 0.2)  # A_trunk [rad/(s N m)]
     range_normalised_admittance: bool = True  # scale A_i by (range_i / mean range)^2
     balance_hands: bool = True  # per-hand K_ext scaled so both hands start at the same rate
+    synchronise_hands: float = 0.0  # >0: exponent of a per-hand progress feedback (extension)
     # internal constraints (eq 6)
     joint_limit_alpha: float = 1.0e-3  # scale of the joint-limit field [N m]
     # relaxation (integration in relaxation time s)
@@ -81,7 +82,7 @@ class PmpConfig(ConfigBase):
             if not math.isfinite(v) or v <= 0:
                 raise ConfigError(f"PmpConfig.{name}: expected a finite value > 0, got {v}")
         nonneg = ("curl", "joint_limit_alpha", "posture_field_gain", "start_tolerance",
-                  "max_displacement")
+                  "max_displacement", "synchronise_hands")
         for name in nonneg:
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:

@@ -151,11 +151,16 @@ class PmpNetwork:
             r += 3
         self.m = r
         self._rows = rows
+        self._hand_rows = {
+            hand: np.concatenate([np.arange(r0, r0 + 3) for _, h, r0 in rows if h == hand])
+            for hand in self.hands
+        }
         k = np.zeros((r, r))
         for (_, _, r0), b in zip(rows, blocks):
             k[r0:r0 + 3, r0:r0 + 3] = b
         self._base_stiffness = k
         self._row_gain = np.ones(r)
+        self._balance_gain = np.ones(r)
         #: -dF/dy of the attractive fields (m, m); obstacles are applied explicitly
         self.field_stiffness = k.copy()
         self.field_stiffness.setflags(write=False)
@@ -168,9 +173,7 @@ class PmpNetwork:
 
     def hand_rows(self, hand: str) -> np.ndarray:
         """Task rows (position, orientation, grasp) belonging to ``hand``."""
-        return np.concatenate(
-            [np.arange(r0, r0 + 3) for kind, h, r0 in self._rows if h == hand]
-        )
+        return self._hand_rows[hand]
 
     def balance_hands(self, state: NetworkState) -> np.ndarray:
         """Scale each hand's field stiffness so all hands start relaxing at the same rate.
@@ -197,11 +200,46 @@ class PmpNetwork:
         row_gain = np.ones(self.m)
         for i, h in enumerate(self.hands):
             row_gain[self.hand_rows(h)] = gains[i]
+        self._balance_gain = row_gain
+        self._apply_row_gain(row_gain)
+        return gains
+
+    def _apply_row_gain(self, row_gain: np.ndarray) -> None:
         self._row_gain = row_gain
         k = row_gain[:, None] * self._base_stiffness
         k.setflags(write=False)
         self.field_stiffness = k
-        return gains
+
+    @property
+    def can_synchronise(self) -> bool:
+        """Whether :meth:`synchronise_hands` applies (several hands, no held object)."""
+        return self.held_object is None and len(self.hands) > 1
+
+    def synchronise_hands(self, state: NetworkState, initial_errors: np.ndarray,
+                          exponent: float) -> NetworkState:
+        """Re-weight the hands' fields by their relative progress; returns ``state`` with its
+        forces rescaled accordingly.
+
+        An extension to the paper's network (which synchronises the branches through the
+        shared TBG only): hand i's field is multiplied (on top of :meth:`balance_hands`) by
+        ``(f_i / mean f)^exponent``, f_i = its error over its initial error, clipped to
+        [0.25, 4]: a hand that lags gets a stronger pull, one that leads a weaker one, so
+        both cover the same fraction of their way at the same relaxation time (and hence,
+        under one TBG, at the same instant). The equilibrium is unchanged.
+        """
+        err = state.position_errors + 0.1 * state.rotation_errors
+        live = initial_errors > 1e-6
+        if live.sum() < 2:
+            return state
+        f = err[live] / initial_errors[live]
+        gains = np.ones(len(self.hands))
+        gains[live] = np.clip((f / max(float(f.mean()), 1e-12)) ** exponent, 0.25, 4.0)
+        row_gain = self._balance_gain.copy()
+        for i, h in enumerate(self.hands):
+            row_gain[self._hand_rows[h]] *= gains[i]
+        old = self._row_gain
+        self._apply_row_gain(row_gain)
+        return state._replace(force=state.force * (row_gain / old))
 
     def final_target(self, hand: str) -> np.ndarray:
         """Where ``hand`` must be at equilibrium (3,) [m]."""

@@ -93,6 +93,7 @@ class PmpPlanner:
             max_steps=max_steps, stall_steps=c.stall_steps, tolerance=c.convergence_tolerance,
             rotation_tolerance=c.rotation_tolerance, boundary_fraction=c.boundary_fraction,
             normalise_rate=normalise, balance_hands=normalise and c.balance_hands,
+            synchronise=c.synchronise_hands if normalise else 0.0,
         )
 
     # ------------------------------------------------------------------ inputs

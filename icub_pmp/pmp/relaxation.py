@@ -35,7 +35,9 @@ that would put a hand inside an obstacle is halved and retried. Obstacles (expli
 ``F`` of the fields are evaluated at the start of the step.
 
 Before the first step the hands' fields may be balanced (:meth:`PmpNetwork.balance_hands`) and
-the admittance scaled so the initial relaxation rate is 1 per unit s (Appendix A's gamma = 1).
+the admittance scaled so the initial relaxation rate is 1 per unit s (Appendix A's gamma = 1);
+before every step the hands' fields may be re-weighted by their relative progress
+(:meth:`PmpNetwork.synchronise_hands`, an extension: ``synchronise`` > 0).
 
 Stopping: converged when every hand is within ``tolerance`` of its target (and orientation
 within ``rotation_tolerance``, and no torque beyond its limit when a torque-limit field is in
@@ -81,6 +83,7 @@ class RelaxationSettings:
     boundary_fraction: float = 0.99
     normalise_rate: bool = True
     balance_hands: bool = True
+    synchronise: float = 0.0  # exponent of PmpNetwork.synchronise_hands (0 = off)
 
     def __post_init__(self) -> None:
         checks = {
@@ -93,6 +96,7 @@ class RelaxationSettings:
             "tolerance": self.tolerance > 0,
             "rotation_tolerance": self.rotation_tolerance > 0,
             "boundary_fraction": 0.0 < self.boundary_fraction < 1.0,
+            "synchronise": self.synchronise >= 0.0,
         }
         for name, ok in checks.items():
             value = getattr(self, name)
@@ -181,6 +185,8 @@ class Relaxation:
         converged = self._converged(state)
         if converged:
             reason = "converged"
+        sync = cfg.synchronise > 0 and network.can_synchronise
+        e0 = state.position_errors + 0.1 * state.rotation_errors
         frac = cfg.boundary_fraction
         flo, fhi = frac * lo, frac * hi
         tol, rot_tol = cfg.tolerance, cfg.rotation_tolerance
@@ -188,6 +194,9 @@ class Relaxation:
         step = 0
         while not converged and step < cfg.max_steps:
             step += 1
+            if sync:
+                state = network.synchronise_hands(state, e0, cfg.synchronise)
+                kmat = network.field_stiffness
             jac = state.jacobian
             g = jac.T @ state.force + state.torque
             for _ in range(12):  # step halving only when a hand would enter an obstacle
