@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import os
-from typing import Callable, NamedTuple, Sequence
+from typing import Any, Callable, NamedTuple, Sequence
 
 # IPOPT's linear solver (MUMPS) is built with OpenMP; on a 10-variable problem its thread pool
 # costs more than it gives (about 20 % per solve measured here). Must be set before the IPOPT
@@ -27,7 +27,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import casadi as ca  # noqa: E402
 import numpy as np  # noqa: E402
 
-from icub_pmp.cartesian.arm_linear_constraints import ArmLinearConstraints
+from icub_pmp.cartesian.arm_linear_constraints import ArmLinearConstraints, LinearConstraints
 from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
 from icub_pmp.cartesian.ik_config import IkConfig
 from icub_pmp.cartesian.kinematic_chain import KinematicChain
@@ -95,8 +95,9 @@ class IkProblem:
         self.config = config
         self.kinematics = CasadiKinematics(model, chain.frame, chain.fk_joints)
         n, nf = chain.n, len(chain.fixed_joints)
-        sizes = (("x_d", 3), ("R_d", 9), ("w_ori", 1), ("w_rest", n), ("q_rest", n))
-        sizes += (("q_fixed", nf),)
+        sizes = (
+            ("x_d", 3), ("R_d", 9), ("w_ori", 1), ("w_rest", n), ("q_rest", n), ("q_fixed", nf)
+        )
         slices, i = {}, 0
         for name, k in sizes:
             slices[name] = slice(i, i + k)
@@ -116,10 +117,9 @@ class IkProblem:
         idx = model.indices(chain.joints)
         self.lbx = model.lower[idx].copy()
         self.ubx = model.upper[idx].copy()
+        self.linear: LinearConstraints | None = None
         if config.shoulder_constraints:
             self.linear = ArmLinearConstraints(chain.hand).over(chain.joints)
-        else:
-            self.linear = None
         g = [POSITION_SCALE * self.position_error_sq]
         if self.linear is not None:
             g.append(ca.DM(self.linear.C) @ self.q)
@@ -142,7 +142,7 @@ class IkProblem:
         self._extra_fn = None
         if extra:
             self._extra_fn = ca.Function("extra", [self.q, self.p], [ca.vertcat(*extra)])
-        opts = {
+        opts: dict[str, Any] = {
             "ipopt.print_level": 0,
             "ipopt.sb": "yes",
             "print_time": False,
