@@ -44,7 +44,7 @@ class PmpConfig(ConfigBase):
     # internal constraints (eq 6)
     joint_limit_alpha: float = 1.0e-3  # scale of the joint-limit field [N m]
     # relaxation (integration in relaxation time s)
-    initial_step: float = 0.05  # first step [s units]
+    initial_step: float = 0.2  # first step [s units]
     step_growth: float = 1.35  # growth of the step from one step to the next
     max_step: float = 1.0e4  # largest step [s units]
     max_displacement: float = 0.0  # >0: step control, hand motion per step [m]
