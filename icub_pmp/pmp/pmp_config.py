@@ -56,7 +56,7 @@ class PmpConfig(ConfigBase):
     # success (mental simulation verdict)
     success_tolerance: float = 1.0e-3  # hand within this of its target at tau [m]
     rotation_success_tolerance: float = 0.01  # [rad]
-    start_tolerance: float = 0.05  # start may exceed a joint limit by this much [rad]
+    start_tolerance: float = 0.05  # start may exceed a limit by this much [rad] (then clamped)
     # posture memory fallback (Sect. 4)
     posture_memory_size: int = 20000  # babbled postures (0 = no fallback)
     posture_memory_seed: int = 0

@@ -242,9 +242,12 @@ class PmpPlanner:
             - set(net.branches.joint_names)
         )
         q = net.q_full(net.initial_state())
+        lower, upper = net.lower.copy(), net.upper.copy()
+        frozen = net.branches.admittance == 0  # frozen joints stay where they start
+        lower[frozen] = upper[frozen] = q[net.joint_index][frozen]
         key = (
             net.branches.joint_names, net.frames,
-            tuple(np.round(net.lower, 6)), tuple(np.round(net.upper, 6)),
+            tuple(np.round(lower, 6)), tuple(np.round(upper, 6)),
             tuple(round(float(q[self._names.index(j)]), 4) for j in fixed),
         )
         mem = self._memories.get(key)
@@ -252,7 +255,7 @@ class PmpPlanner:
             if len(self._memories) >= 16:
                 self._memories.pop(next(iter(self._memories)))
             mem = self._memories[key] = PostureMemory(
-                self.provider, net.joint_index, net.frames, q, net.lower, net.upper,
+                self.provider, net.joint_index, net.frames, q, lower, upper,
                 self.config.posture_memory_size, self.config.posture_memory_seed,
             )
         return mem
