@@ -6,8 +6,12 @@ lockstep with a controller in another process.
 Figures (real-time factors = simulated s per wall s, medians of windows):
 - physics_rtf: ``Simulator.step`` alone (1 ms steps, robot held, objects on the table).
 - node_rtf: the ``sim_bridge`` node as a subprocess, free-running as fast as possible,
-  publishing /clock, /joint_states, 4 FT, IMU and ground truth every step, no cameras.
-- node_rtf_cameras: the same with both cameras at 30 Hz (sim time), rendered on the worker.
+  publishing /clock, /joint_states and the 4 FT every step to a listener process that
+  subscribes to them (the node skips streams nobody subscribes to), no cameras.
+- node_rtf_cameras: the same with both cameras at 30 Hz (sim time), rendered on the worker,
+  the listener also subscribing to both images.
+- *_cpu_rtf: sim seconds per CPU second of the node process (user + system), a figure less
+  sensitive to other processes on a shared machine than the wall-clock RTF.
 - lockstep_rtf: ``mode:=lockstep`` with a trivial controller in another process that answers
   every /joint_states with a PD /effort_command on all 23 joints (stamp copied).
 - render_ms: one frame of both cameras rendered in this process (median) [ms].
@@ -70,8 +74,8 @@ def render_ms(frames: int) -> float:
     return statistics.median(times)
 
 
-def _clock_rtf(probe, seconds: float, warmup: float) -> float:
-    """RTF from /clock stamps seen by ``probe`` over ``seconds`` (median of windows)."""
+def _clock_rtf(probe, seconds: float, warmup: float, pid: int) -> tuple[float, float]:
+    """(wall RTF, sim s per node CPU s) from /clock stamps over ``seconds`` (medians)."""
     from rosgraph_msgs.msg import Clock
 
     from icub_pmp.nodes.conversions import time_to_sec
@@ -89,32 +93,40 @@ def _clock_rtf(probe, seconds: float, warmup: float) -> float:
         if not probe.wait_for(lambda: last["t"] is not None, 60.0):
             raise RuntimeError("no /clock from sim_bridge")
         time.sleep(warmup)
-        rates = []
+        rates, cpu = [], []
         windows = 5
         for _ in range(windows):
-            t_sim0, t0 = last["t"], time.perf_counter()
+            t_sim0, t0, c0 = last["t"], time.perf_counter(), _cpu_seconds(pid)
             time.sleep(seconds / windows)
             rates.append((last["t"] - t_sim0) / (time.perf_counter() - t0))
-        return statistics.median(rates)
+            cpu.append((last["t"] - t_sim0) / max(_cpu_seconds(pid) - c0, 1e-6))
+        return statistics.median(rates), statistics.median(cpu)
     finally:
         probe.node.destroy_subscription(sub)
 
 
-def node_rtf(domain: int, seconds: float, params: dict, controller: bool = False) -> float:
-    """Start sim_bridge (and optionally the trivial controller) and measure its RTF."""
+def _cpu_seconds(pid: int) -> float:
+    """user + system CPU time [s] of process ``pid`` and its threads (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def node_rtf(domain: int, seconds: float, params: dict, helper: list[str]
+             ) -> tuple[float, float]:
+    """Start sim_bridge and a helper process (``--listener`` / ``--controller``); measure the
+    wall-clock RTF and the sim time per CPU second of the node."""
     from icub_pmp.testing import NodeProcess, RosProbe, ros_environment
 
     env = ros_environment(domain)
     procs = []
     probe = RosProbe(domain, name="bench_sim_probe")
     try:
-        procs.append(NodeProcess("sim_bridge", env=env,
-                                 params_file=ROOT / "config" / "sim_bridge.yaml",
-                                 parameters=params))
-        if controller:
-            procs.append(NodeProcess(command=[sys.executable, str(Path(__file__).resolve()),
-                                              "--controller"], env=env))
-        return _clock_rtf(probe, seconds, warmup=2.0)
+        node = NodeProcess("sim_bridge", env=env,
+                           params_file=ROOT / "config" / "sim_bridge.yaml", parameters=params)
+        procs.append(node)
+        procs.append(NodeProcess(command=[sys.executable, str(Path(__file__).resolve()),
+                                          *helper], env=env))
+        return _clock_rtf(probe, seconds, warmup=2.0, pid=node.pid)  # run_node.sh execs: same pid
     finally:
         probe.close()
         for p in reversed(procs):
@@ -162,13 +174,53 @@ def controller_main() -> None:
         rclpy.try_shutdown()
 
 
+def listener_main(cameras: bool) -> None:
+    """Subscribe (no-op) to /joint_states, the 4 FT and optionally both images."""
+    import rclpy
+    from geometry_msgs.msg import WrenchStamped
+    from rclpy.experimental import EventsExecutor
+    from rclpy.node import Node
+    from rclpy.qos import qos_profile_sensor_data
+    from sensor_msgs.msg import Image, JointState
+
+    rclpy.init()
+    node = Node("bench_listener")
+    count = [0]
+
+    def cb(msg: object) -> None:
+        count[0] += 1
+
+    node.create_subscription(JointState, "/joint_states", cb, qos_profile_sensor_data)
+    for ft in ("l_arm_ft", "r_arm_ft", "l_leg_ft", "r_leg_ft"):
+        node.create_subscription(WrenchStamped, f"/ft/{ft}", cb, qos_profile_sensor_data)
+    if cameras:
+        for side in ("left", "right"):
+            node.create_subscription(Image, f"/cam/{side}/image_raw", cb,
+                                     qos_profile_sensor_data)
+    ex = EventsExecutor()
+    ex.add_node(node)
+    try:
+        while rclpy.ok():
+            ex.spin_once(timeout_sec=0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="short windows (< 2 min)")
     ap.add_argument("--controller", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--listener", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--cameras", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.controller:
         controller_main()
+        return
+    if a.listener:
+        listener_main(a.cameras)
         return
     from icub_pmp.testing import reserve_domain_id
 
@@ -178,13 +230,17 @@ def main() -> None:
     res["physics_rtf"] = round(physics_rtf(seconds), 2)
     res["render_ms"] = round(render_ms(15 if a.quick else 60), 2)
     with reserve_domain_id() as domain:
-        res["node_rtf"] = round(node_rtf(domain, seconds, {
-            "real_time_factor": 0.0, "cameras_enabled": False}), 2)
-        res["node_rtf_cameras"] = round(node_rtf(domain, seconds, {
-            "real_time_factor": 0.0, "cameras_enabled": True}), 2)
-        res["lockstep_rtf"] = round(node_rtf(domain, seconds, {
-            "real_time_factor": 0.0, "cameras_enabled": False, "mode": "lockstep",
-            "lockstep_timeout": 0.05}, controller=True), 2)
+        runs = {
+            "node_rtf": ({"real_time_factor": 0.0, "cameras_enabled": False}, ["--listener"]),
+            "node_rtf_cameras": ({"real_time_factor": 0.0, "cameras_enabled": True},
+                                 ["--listener", "--cameras"]),
+            "lockstep_rtf": ({"real_time_factor": 0.0, "cameras_enabled": False,
+                              "mode": "lockstep", "lockstep_timeout": 0.05}, ["--controller"]),
+        }
+        for key, (params, helper) in runs.items():
+            wall, cpu = node_rtf(domain, seconds, params, helper)
+            res[key] = round(wall, 2)
+            res[key.replace("_rtf", "_cpu_rtf")] = round(cpu, 2)
     res["cpu_count"] = os.cpu_count()
     res["load_avg_1min"] = round(os.getloadavg()[0], 2)
     res["wall_s"] = round(time.perf_counter() - t_start, 1)

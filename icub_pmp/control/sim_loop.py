@@ -61,6 +61,8 @@ class SimLoop:
         self._est_idx = (self.sim.indices(self.estimator.joint_names)
                          if self.estimator else None)
         self._prev = None  # joint state at the start of the last physics step
+        #: wall-clock seconds per call of WrenchEstimator.update, ImpedanceController.step and
+        #: Simulator.step (filled while ``record_timing``)
         self.timing = {"estimator": [], "controller": [], "sim": []}
         self.record_timing = False
 
@@ -75,8 +77,8 @@ class SimLoop:
         js = sim.joint_state()
         est = None
         clock = time.perf_counter
-        if self.estimator is not None and self._prev is not None:
-            t0 = clock()
+        if (self.estimator is not None and self._prev is not None
+                and self.sim.steps % self.estimator.config.sample_every == 0):
             p = self._prev
             ft = {}
             for h, name in _FT.items():
@@ -84,11 +86,12 @@ class SimLoop:
                 ft[h] = np.concatenate((w.force, w.torque))
             imu = sim.imu().linear_acceleration if \
                 self.estimator.config.gravity_source == "imu" else None
-            est = self.estimator.update(p.time, p.position[self._est_idx],
-                                        p.velocity[self._est_idx], ft, imu)
-            self.controller.set_estimate(est.t, self.estimator.joint_names, est.tau)
+            q, v = p.position[self._est_idx], p.velocity[self._est_idx]
+            t0 = clock()
+            est = self.estimator.update(p.time, q, v, ft, imu)
             if self.record_timing:
                 self.timing["estimator"].append(clock() - t0)
+            self.controller.set_estimate(est.t, self.estimator.joint_names, est.tau)
         t0 = clock()
         out = self.controller.step(js.time, js.position, js.velocity)
         if self.record_timing:

@@ -75,11 +75,12 @@ class WrenchEstimator:
         self.joint_names = self.model.joint_names
         self.nq = self.model.nq
         self._sign = 1.0 if cfg.ft_convention == "parent_on_child" else -1.0
+        rate = cfg.sample_rate_hz
         self._filter = JointStateFilter(
-            self.nq, cfg.rate_hz, cfg.velocity_cutoff_hz, cfg.acceleration_cutoff_hz
+            self.nq, rate, cfg.velocity_cutoff_hz, cfg.acceleration_cutoff_hz
         )
-        self._ft_filter = {h: ButterworthLowPass(6, cfg.ft_cutoff_hz, cfg.rate_hz) for h in HANDS}
-        self._imu_filter = ButterworthLowPass(3, cfg.imu_cutoff_hz, cfg.rate_hz)
+        self._ft_filter = {h: ButterworthLowPass(6, cfg.ft_cutoff_hz, rate) for h in HANDS}
+        self._imu_filter = ButterworthLowPass(3, cfg.imu_cutoff_hz, rate)
         self._contact = {
             h: ContactDetector(cfg.contact_force_on, cfg.contact_force_off,
                                cfg.contact_min_samples)

@@ -20,7 +20,8 @@ GRAVITY_SOURCES = ("model", "imu")
 class WrenchEstimatorConfig(ConfigBase):
     """Filtering, contact detection, RFRR learning and model options of the estimator."""
 
-    rate_hz: float = 1000.0  # nominal joint-state rate the filters are designed for [Hz]
+    rate_hz: float = 1000.0  # nominal joint-state rate [Hz]
+    sample_every: int = 1  # process one joint-state sample in N (runs at rate_hz / N)
     ft_convention: str = "child_on_parent"  # sign convention of the /ft/* wrenches
     velocity_cutoff_hz: float = 0.0  # low-pass on measured joint velocity [Hz], 0 = as measured
     acceleration_cutoff_hz: float = 30.0  # low-pass on the differentiated velocity [Hz]
@@ -49,6 +50,11 @@ class WrenchEstimatorConfig(ConfigBase):
     stale_timeout: float = 0.1  # node: FT older than this (vs joint states) is stale [s]
     publish_every: int = 1  # node: wrench/contact/predicted-FT topics every N samples
 
+    @property
+    def sample_rate_hz(self) -> float:
+        """Rate of the samples the estimator processes [Hz] (filters are designed for it)."""
+        return self.rate_hz / self.sample_every
+
     def validate(self) -> None:
         """Check ranges and choices (raises :class:`ConfigError` naming the field)."""
         if self.rate_hz <= 0:
@@ -59,11 +65,16 @@ class WrenchEstimatorConfig(ConfigBase):
             raise ConfigError(
                 f"gravity_source {self.gravity_source!r}; valid: {GRAVITY_SOURCES}"
             )
+        if self.sample_every < 1:
+            raise ConfigError(f"sample_every must be >= 1, got {self.sample_every}")
+        nyquist = self.sample_rate_hz / 2
         for name in ("velocity_cutoff_hz", "acceleration_cutoff_hz", "ft_cutoff_hz",
                      "imu_cutoff_hz"):
             v = getattr(self, name)
-            if not 0 <= v < self.rate_hz / 2:
-                raise ConfigError(f"{name} must be in [0, {self.rate_hz / 2}), got {v}")
+            if not 0 <= v < nyquist:
+                raise ConfigError(
+                    f"{name} must be in [0, {nyquist}) (Nyquist of rate_hz / sample_every), "
+                    f"got {v}")
         if not 0 <= self.contact_force_off < self.contact_force_on:
             raise ConfigError(
                 "need 0 <= contact_force_off < contact_force_on, got "

@@ -16,8 +16,10 @@ Synchronisation: with ``require_same_stamp`` (lockstep with the simulator) a sam
 processed when the joint state and both arm FT wrenches with the same stamp have arrived (in
 any order); otherwise each joint state is processed with the latest FT wrenches, unless they
 are older than ``stale_timeout`` (then it is skipped with a throttled warning). Malformed
-messages are dropped with a throttled warning. The joint torques are published for every
-sample, the other topics every ``publish_every`` samples. Parameters:
+messages are dropped with a throttled warning. One synchronised sample in ``sample_every`` is
+processed (wholeBodyDynamics runs at 100 Hz on the robot: ``sample_every: 10`` at 1 kHz). The
+joint torques are published for every processed sample, the other topics every
+``publish_every`` processed samples. Parameters:
 :class:`WrenchEstimatorConfig` fields (``config/wrench_estimator.yaml``); ``rfrr_enabled``,
 ``rfrr_learning``, ``contact_*``, ``require_same_stamp``, ``stale_timeout`` and
 ``publish_every`` change at run time, the others rebuild the estimator (its learnt RFRR
@@ -75,6 +77,7 @@ class WrenchEstimatorNode(Node):
         self._ft: dict[str, dict[int, np.ndarray]] = {h: {} for h in HANDS}
         self._imu: np.ndarray | None = None
         self._last_ns = -1
+        self._seen = 0
         self.samples = 0
         self.dropped = 0
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -194,6 +197,10 @@ class WrenchEstimatorNode(Node):
     # ------------------------------------------------------------------ processing
     def _process(self, ns: int, msg: JointState, ft: dict[str, np.ndarray]) -> None:
         if ns <= self._last_ns:
+            return
+        self._seen += 1
+        if (self._seen - 1) % self.config.sample_every:
+            self._last_ns = ns
             return
         try:
             if msg.name != self._cached_names:
