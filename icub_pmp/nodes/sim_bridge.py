@@ -20,6 +20,10 @@ possible) or ``lockstep``: after publishing the state stamped t, the next step w
 ``lockstep_timeout`` s of wall time) for an /effort_command stamped exactly t; on timeout it
 steps with the last valid command and warns (throttled).
 
+Streams other than /clock and /joint_states (FT, IMU, ground truth, cameras) are only filled
+and published while they have subscribers (checked every 100 steps), as Gazebo's lazy
+publishers do.
+
 Threads: the physics loop runs on its own thread and is the only one touching MuJoCo; the
 ``EventsExecutor`` spins on the main thread (``spin_once`` in a loop: the Jazzy wheel's
 ``spin()`` ignores SIGINT): the effort callback validates and hands the command over, service
@@ -137,6 +141,11 @@ class SimBridge(Node):
             m = WrenchStamped()
             m.header.frame_id = "root_link"
             self._gt_msgs[h] = m
+        self._obj_msgs = {}
+        for o in self.sim.object_names:
+            m = PoseStamped()
+            m.header.frame_id = "root_link"
+            self._obj_msgs[o] = m
         # --- cameras
         self.cameras: CameraRenderer | None = None
         if self.config.cameras_enabled:
@@ -149,6 +158,7 @@ class SimBridge(Node):
         self._requests: collections.deque[tuple[Callable[[], Any], list, threading.Event]] = \
             collections.deque()
         self._wake = threading.Event()
+        self._active_cache: dict[int, bool] = {}
         self.rejected = 0
         self.timeouts = 0
         self.paused = self.config.start_paused
@@ -320,6 +330,14 @@ class SimBridge(Node):
         return resp
 
     # ------------------------------------------------------------------ publishing
+    def _active(self, pub: Any) -> bool:
+        """Whether ``pub`` has subscribers (refreshed every 100 steps): streams nobody reads
+        are not filled (/clock and /joint_states always are)."""
+        key = id(pub)
+        if self.sim.steps % 100 == 0 or key not in self._active_cache:
+            self._active_cache[key] = pub.get_subscription_count() > 0
+        return self._active_cache[key]
+
     def _publish_state(self) -> None:
         sim = self.sim
         ns = int(round(sim.time * 1e9))
@@ -335,13 +353,15 @@ class SimBridge(Node):
         self.pub_js.publish(js)
         ft = sim.ft_all()
         for k, n in enumerate(FT_SENSORS):
+            if not self._active(self.pub_ft[n]):
+                continue
             m = self._ft_msgs[n]
             _set_stamp(m.header.stamp, ns)
             _set_vec(m.wrench.force, ft[k, :3])
             _set_vec(m.wrench.torque, ft[k, 3:])
             self.pub_ft[n].publish(m)
         step = sim.steps
-        if step % self.config.imu_decimation == 0:
+        if step % self.config.imu_decimation == 0 and self._active(self.pub_imu):
             imu = sim.imu()
             m = self._imu_msg
             _set_stamp(m.header.stamp, ns)
@@ -353,22 +373,27 @@ class SimBridge(Node):
             self.pub_imu.publish(m)
         if step % self.config.ground_truth_decimation == 0:
             for h, m in self._gt_msgs.items():
+                if not self._active(self.pub_gt[h]):
+                    continue
                 w = sim.contact_wrench(h)
                 _set_stamp(m.header.stamp, ns)
                 _set_vec(m.wrench.force, w.force)
                 _set_vec(m.wrench.torque, w.torque)
                 self.pub_gt[h].publish(m)
             for o, pub in self.pub_obj.items():
+                if not self._active(pub):
+                    continue
                 pose = sim.object_pose(o)
-                m = PoseStamped()
+                m = self._obj_msgs[o]
                 _set_stamp(m.header.stamp, ns)
-                m.header.frame_id = "root_link"
                 _set_vec(m.pose.position, pose.position)
                 q = pose.quaternion
                 m.pose.orientation.w, m.pose.orientation.x = float(q[0]), float(q[1])
                 m.pose.orientation.y, m.pose.orientation.z = float(q[2]), float(q[3])
                 pub.publish(m)
-        if self.cameras is not None and ns >= self._next_cam_ns:
+        if self.cameras is not None and ns >= self._next_cam_ns and (
+                self._active(self.pub_img["left"]) or self._active(self.pub_img["right"])
+                or self._active(self.pub_info["left"]) or self._active(self.pub_info["right"])):
             self._next_cam_ns = ns + self._cam_period_ns
             self.cameras.request(sim.data)
 
