@@ -134,7 +134,7 @@ def bench_dds(window: float, sample_every: int | None) -> dict:
     params = {
         "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10,
                        "ground_truth_decimation": 10},
-        "wrench_estimator": {"use_sim_time": True, "publish_every": 10,
+        "wrench_estimator": {"publish_every": 10,
                              "sample_every": sample_every or 1},
         "impedance_controller": {"use_sim_time": True},
     }

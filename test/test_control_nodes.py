@@ -58,7 +58,7 @@ def graph(ros_domain_id):
     env = ros_environment(ros_domain_id)
     params = {
         "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10},
-        "wrench_estimator": {"use_sim_time": True},
+        "wrench_estimator": {},
         "impedance_controller": {"use_sim_time": True},
     }
     with NodeGraph(NODES, params, env=env) as g:

@@ -82,6 +82,13 @@ class ImpedanceController:
         upper = self.spec.upper_body_joints
         self._ctl_model = np.array([self._index[j] for j in upper])
         self._model_idx = self.model.indices(upper)
+        # q_model = q[_to_model]; tau[:n_model] += tau_model[_from_model]
+        self._to_model = np.empty(self.model.nq, dtype=int)
+        self._to_model[self._model_idx] = self._ctl_model
+        if not np.array_equal(self._ctl_model, np.arange(len(upper))):
+            raise ValueError("the model joints must come first in RobotSpec.actuated_joints")
+        self._from_model = np.array(self._model_idx)
+        self._n_model = len(upper)
         lower = np.zeros(self.n)
         upper_lim = np.zeros(self.n)
         lower[self._ctl_model] = self.model.lower[self._model_idx]
@@ -119,6 +126,8 @@ class ImpedanceController:
         self._pid.set_gains(c.torque_kp, c.torque_ki, c.torque_kd, c.torque_kff,
                             c.torque_integral_limit, c.torque_derivative_cutoff_hz)
         self._tau_max = self.torque_limits * c.torque_limit_scale
+        self._guard_lo = self.lower + c.joint_limit_margin
+        self._guard_hi = self.upper - c.joint_limit_margin
         if old is None:
             self.setpoints = SetpointGenerator(self.joint_names, self.lower, self.upper)
         if old is not None and old.mode != c.mode:
@@ -236,18 +245,17 @@ class ImpedanceController:
         else:
             tau_d = -self._k[c.mode] * (q - sp.q) - self._d[c.mode] * (v - sp.v)
         if c.feedforward != "none":
-            qm = self._model_q(q)
+            m = self._to_model
             if c.feedforward == "gravity" or c.mode == "torque":
-                ff = self.model.gravity_torques(qm)
+                ff = self.model.gravity_torques(q[m])
             else:
-                ff = self.model.inverse_dynamics(qm, self._model_q(sp.v), self._model_q(sp.a))
-            tau_d[self._ctl_model] += ff[self._model_idx]
+                ff = self.model.inverse_dynamics(q[m], sp.v[m], sp.a[m])
+            tau_d[: self._n_model] += ff[self._from_model]
 
         # joint-limit guard: within `margin` of a limit and nearer to it than the set-point
         # (pushed there; any joint in torque mode), a spring-damper pushes back to the band
         # edge or to the set-point, whichever is nearer to the limit
-        lo = self.lower + c.joint_limit_margin
-        hi = self.upper - c.joint_limit_margin
+        lo, hi = self._guard_lo, self._guard_hi
         if c.mode != "torque":
             lo = np.minimum(lo, sp.q)
             hi = np.maximum(hi, sp.q)
@@ -281,9 +289,3 @@ class ImpedanceController:
         np.clip(tau, -self._tau_max, self._tau_max, out=tau)
         self.steps += 1
         return ControlOutput(float(t), tau, tau_d, sp, self._saturated.copy(), guard, status)
-
-    def _model_q(self, x: np.ndarray) -> np.ndarray:
-        """Controller vector (n,) -> model vector (nq,) (model joints only)."""
-        out = np.zeros(self.model.nq)
-        out[self._model_idx] = x[self._ctl_model]
-        return out

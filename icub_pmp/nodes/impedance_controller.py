@@ -26,6 +26,8 @@ hold when no joint state came for ``state_timeout``; estimates older than
 
 from __future__ import annotations
 
+import array
+
 import numpy as np
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
@@ -237,7 +239,7 @@ class ImpedanceControllerNode(Node):
         self.steps += 1
         m = self._effort
         m.header.stamp = stamp
-        m.effort = out.tau.tolist()
+        m.effort = array.array("d", out.tau.tobytes())
         self.pub_effort.publish(m)
         if was_safe:
             self.get_logger().info("joint states are back: holding the measured posture")

@@ -12,14 +12,15 @@ publishes  /estimated_joint_torques (JointState: name + effort [N m], stamp of t
            /wrench_estimator/predicted_ft/{l_arm_ft,r_arm_ft} (WrenchStamped: the FT reading
            the model predicts with null hand wrenches, for the Table 1 validation)
 
-Synchronisation: with ``require_same_stamp`` (lockstep with the simulator) a sample is
-processed when the joint state and both arm FT wrenches with the same stamp have arrived (in
-any order); otherwise each joint state is processed with the latest FT wrenches, unless they
-are older than ``stale_timeout`` (then it is skipped with a throttled warning). Malformed
-messages are dropped with a throttled warning. One synchronised sample in ``sample_every`` is
-processed (wholeBodyDynamics runs at 100 Hz on the robot: ``sample_every: 10`` at 1 kHz). The
-joint torques are published for every processed sample, the other topics every
-``publish_every`` processed samples. Parameters:
+Time: the estimator works on message stamps only (no clock, ``use_sim_time`` not needed: it
+saves deserialising /clock at 1 kHz). Synchronisation: with ``require_same_stamp`` (lockstep
+with the simulator) a sample is processed when the joint state and both arm FT wrenches with
+the same stamp have arrived (in any order); otherwise each joint state is processed with the
+latest FT wrenches, unless they are older than ``stale_timeout`` (then it is skipped with a
+throttled warning). Malformed messages are dropped with a throttled warning. One
+synchronised sample in ``sample_every`` is processed (wholeBodyDynamics runs at 100 Hz on the
+robot: ``sample_every: 10`` at 1 kHz). The joint torques are published for every processed
+sample, the other topics every ``publish_every`` processed samples. Parameters:
 :class:`WrenchEstimatorConfig` fields (``config/wrench_estimator.yaml``); ``rfrr_enabled``,
 ``rfrr_learning``, ``contact_*``, ``require_same_stamp``, ``stale_timeout`` and
 ``publish_every`` change at run time, the others rebuild the estimator (its learnt RFRR
@@ -27,6 +28,8 @@ state is lost).
 """
 
 from __future__ import annotations
+
+import array
 
 import numpy as np
 import rclpy
@@ -220,7 +223,7 @@ class WrenchEstimatorNode(Node):
         stamp = msg.header.stamp
         m = self._tau_msg
         m.header.stamp = stamp
-        m.effort = est.tau.tolist()
+        m.effort = array.array("d", est.tau.tobytes())
         self.pub_tau.publish(m)
         if self.samples % self.config.publish_every:
             return
