@@ -261,3 +261,15 @@ def test_tf2_msgs_type_hash_equals_the_official_one():
             found.append(j.read_text())
     assert found, "tf2_msgs is not installed (make env builds interfaces/tf2_msgs)"
     assert official in found[0]
+
+
+def test_bag_core_imports_no_ros():
+    """icub_pmp.bags (and the link-transform core) load without rclpy or message modules."""
+    code = ("import sys, icub_pmp.bags, icub_pmp.bags.bag_reader, icub_pmp.bags.bag_writer, "
+            "icub_pmp.bags.message_definitions, icub_pmp.kinematics.link_transforms, "
+            "icub_pmp.kinematics.robot_state_publisher_config\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy' "
+            "or m.split('.')[0].endswith(('_msgs', '_srvs', '_interfaces'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"

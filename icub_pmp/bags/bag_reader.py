@@ -61,7 +61,7 @@ class BagTopic:
     name: str
     msgtype: str
     count: int
-    msgdef: str = ""
+    msgdef: str = field(default="", repr=False)
     encoding: str = "ros2msg"
     serialization_format: str = "cdr"
     qos_profiles: tuple[Qos, ...] = ()
