@@ -15,7 +15,8 @@ Steps of :meth:`PmpPlanner.plan`:
    ``posture_memory_attempts``); keep the best relaxation (:mod:`posture_memory`);
 3. with target forces, continue the relaxation with the torque-limit field of Sect. 2.3
    (null-space settling);
-4. sample the path at the TBG's times, compute the predicted hand paths and the residuals.
+4. sample the path at the TBG's times (Hermite, :mod:`tbg_timing`) and compute the residuals by
+   forward kinematics; the predicted hand paths are computed when first asked for.
 """
 
 from __future__ import annotations

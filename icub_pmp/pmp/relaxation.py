@@ -20,19 +20,19 @@ two hands), not an (nz x nz) one; with ``B = h A / (1 + h A D)``::
     dz = B g - B G^T K (I + G B G^T K)^-1 G B g,     g = G^T F + T_int
 
 It is unconditionally stable (any h), which an explicit Euler step of the same flow is not
-(stable only for h < 2 / lambda_max(K G A G^T), a few hundred times smaller than the steps
-used here near the end); for small h it follows the PMP flow lines, for large h it converges
-like Gauss-Newton, so the tail ``s -> inf`` (``t -> tau``) is reached in a few steps. The
-step grows geometrically (``step_growth``) from ``initial_step``: with the defaults 10 steps
-reach s = 11 (t = 0.985 tau) and 25 steps s = 1000 (t = tau to machine precision). Optional
-step control (``max_displacement`` > 0):
-h is rescaled after each step so the next one moves the hands by about that much (or what
-remains), growing by at most ``step_growth``, halving at most: nodes evenly spread along the
-hand paths, at the cost of more steps on long paths.
+(stable only for h < 2 / lambda_max(K G A G^T), orders of magnitude below the steps used here
+near the end); for small h it follows the PMP flow lines, for large h it converges like
+Gauss-Newton, so the tail ``s -> inf`` (``t -> tau``) is reached in a few steps. The step grows
+geometrically (``step_growth``) from ``initial_step``: with the defaults 10 steps reach s = 11
+(t = 0.985 tau) and 25 steps s = 1000 (t = tau to machine precision). Optional step control
+(``max_displacement`` > 0): h is rescaled after each step so the next one moves the hands by
+about that much (or what remains), growing by at most ``step_growth``, halving at most: nodes
+evenly spread along the hand paths, at the cost of more steps on long paths.
+
 Joint limits are never crossed: every joint may cover at most ``boundary_fraction`` of its
-remaining distance to a limit per step. A step
-that would put a hand inside an obstacle is halved and retried. Obstacles (explicit) and the
-``F`` of the fields are evaluated at the start of the step.
+remaining distance to a limit (kept 1e-9 of its range away) per step. A step that would put a
+hand inside an obstacle is halved and retried. Obstacles (explicit) and the ``F`` of the
+fields are evaluated at the start of the step.
 
 Before the first step the hands' fields may be balanced (:meth:`PmpNetwork.balance_hands`) and
 the admittance scaled so the initial relaxation rate is 1 per unit s (Appendix A's gamma = 1);
@@ -41,8 +41,8 @@ before every step the hands' fields may be re-weighted by their relative progres
 
 Stopping: converged when every hand is within ``tolerance`` of its target (and orientation
 within ``rotation_tolerance``, and no torque beyond its limit when a torque-limit field is in
-the network); stalled (the equilibrium of an unreachable target, Sect. 4)
-when the worst residual has not improved by 1% in ``stall_steps`` steps; or ``max_steps``.
+the network); stalled (the equilibrium of an unreachable target, Sect. 4) when the worst
+residual has not improved by 1% in ``stall_steps`` steps; or ``max_steps``.
 """
 
 from __future__ import annotations
