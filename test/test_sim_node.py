@@ -157,3 +157,27 @@ def test_services(bridge, ros_probe):
     assert ros_probe.call("/sim/set_paused", SetBool, SetBool.Request(data=False)).success
     assert len(ros_probe.collect("/joint_states", JointState, 5)) == 5
     assert ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="")).success
+
+
+def test_runtime_parameters_validated(bridge, ros_probe):
+    """Run-time parameter changes are validated: a bad mode and a model-shaping parameter are
+    refused with a reason, a valid real_time_factor is accepted; the node keeps running."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    def set_param(name, value):
+        if isinstance(value, str):
+            v = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value)
+        else:
+            v = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
+        req = SetParameters.Request(parameters=[Parameter(name=name, value=v)])
+        return ros_probe.call("/sim_bridge/set_parameters", SetParameters, req).results[0]
+
+    _wait_up(ros_probe, bridge)
+    r = set_param("mode", "warp")
+    assert not r.successful and "mode" in r.reason
+    r = set_param("box_mass", 1.0)
+    assert not r.successful
+    r = set_param("real_time_factor", 1.0)
+    assert r.successful, r.reason
+    assert bridge.alive()
