@@ -76,21 +76,22 @@ def probe(graph, ros_domain_id):
         p.close()
 
 
-def _sim_time(probe: RosProbe) -> float:
-    c = probe.collect("/clock", Clock, 1, 20.0)
-    assert c, "no /clock"
+def _sim_time(probe: RosProbe, graph: NodeGraph) -> float:
+    c = probe.collect("/clock", Clock, 1, 30.0)
+    assert c, "no /clock within 30 s\n" + graph.outputs()
     return c[0].clock.sec + c[0].clock.nanosec * 1e-9
 
 
-def _wait_sim(probe: RosProbe, dt: float, timeout: float = 120.0) -> float:
+def _wait_sim(probe: RosProbe, graph: NodeGraph, dt: float, timeout: float = 120.0) -> float:
     """Wait until simulated time advanced by ``dt`` [s]; returns the new time."""
-    t0 = _sim_time(probe)
+    t0 = _sim_time(probe, graph)
     deadline = time.monotonic() + timeout
     t = t0
     while t - t0 < dt and time.monotonic() < deadline:
         time.sleep(0.2)
-        t = _sim_time(probe)
-    assert t - t0 >= dt, f"simulated time advanced only {t - t0:.3f} s in {timeout} s"
+        t = _sim_time(probe, graph)
+    assert t - t0 >= dt, f"simulated time advanced only {t - t0:.3f} s in {timeout} s\n" + \
+        graph.outputs()
     return t
 
 
@@ -100,7 +101,7 @@ def test_lockstep_loop_answers_every_joint_state_and_holds(graph, probe):
     within 0.5 deg against gravity."""
     rec = _Recorder(probe, {"/joint_states": JointState, "/effort_command": JointState,
                             "/estimated_joint_torques": JointState})
-    _wait_sim(probe, 0.3)
+    _wait_sim(probe, graph, 0.3)
     js, eff, est = (rec.get(t) for t in ("/joint_states", "/effort_command",
                                          "/estimated_joint_torques"))
     assert len(eff) > 100 and len(est) > 100
@@ -133,7 +134,7 @@ def test_trajectory_is_followed_and_bad_ones_are_rejected(graph, probe):
     for m in (bad_nan, bad_name, bad_time):
         pub.publish(m)
     pub.publish(arrays_to_trajectory(["r_elbow"], [0.5], np.array([[target]])))
-    _wait_sim(probe, 0.8)
+    _wait_sim(probe, graph, 0.8)
     js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
     q = dict(zip(js.name, js.position))["r_elbow"]
     assert abs(math.degrees(q - target)) < 0.5
@@ -158,7 +159,7 @@ def test_external_wrench_and_contact_over_dds(graph, probe):
     req.wrench.force.y, req.wrench.force.z = -1.5, 2.6
     resp = probe.call("/sim/apply_wrench", ApplyWrench, req)
     assert resp.success, resp.message
-    _wait_sim(probe, 0.6)
+    _wait_sim(probe, graph, 0.6)
     gt = rec.get("/ground_truth/contact_wrench/left_hand")
     est = rec.get("/wrench_estimator/external_wrench_root/left_hand")
     both = sorted(set(gt) & set(est))[-100:]
@@ -171,6 +172,48 @@ def test_external_wrench_and_contact_over_dds(graph, probe):
             assert np.linalg.norm(f_est - f_gt) <= max(0.05 * np.linalg.norm(f_gt), 0.1)
     assert contact and contact[-1]
     probe.node.destroy_subscription(sub)
+
+
+def test_runtime_parameters_and_velocity_command(graph, probe):
+    """Gains and mode change at run time with validation (an unknown mode and a wrong-length
+    gain vector are refused, a valid mode accepted); a velocity command (eq 7) republished
+    every 0.1 s at 0.2 rad/s moves r_shoulder_yaw by about 0.2 rad/s x its duration."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    def set_param(name: str, value: ParameterValue) -> bool:
+        req = SetParameters.Request(parameters=[Parameter(name=name, value=value)])
+        return probe.call("/impedance_controller/set_parameters", SetParameters,
+                          req).results[0].successful
+
+    s = ParameterValue(type=ParameterType.PARAMETER_STRING)
+    s.string_value = "admittance"
+    assert not set_param("mode", s)
+    bad = ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[1.0])
+    assert not set_param("impedance_stiffness_arm", bad)
+    s.string_value = "position"
+    assert set_param("mode", s)
+    assert graph.procs["impedance_controller"].wait_for_output("mode impedance -> position", 20)
+
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    pub = probe.node.create_publisher(JointState, "/impedance_controller/velocity_command", qos)
+    probe.wait_for(lambda: pub.get_subscription_count() > 0, 20.0)
+
+    def q_yaw() -> tuple[float, float]:
+        m = probe.collect("/joint_states", JointState, 1, 20.0)[0]
+        return (m.header.stamp.sec + m.header.stamp.nanosec * 1e-9,
+                dict(zip(m.name, m.position))["r_shoulder_yaw"])
+
+    t0, q0 = q_yaw()
+    t, q = t0, q0
+    deadline = time.monotonic() + 120.0
+    while t - t0 < 0.4 and time.monotonic() < deadline:
+        pub.publish(JointState(name=["r_shoulder_yaw"], velocity=[0.2]))
+        time.sleep(0.05)
+        t, q = q_yaw()
+    rate = (q - q0) / (t - t0)
+    assert 0.1 < rate < 0.3, (rate, t - t0)
+    probe.node.destroy_publisher(pub)
 
 
 def test_hold_service_and_estimate_watchdog(graph, probe):
