@@ -158,10 +158,11 @@ def test_config_validation():
 
 
 def test_shipped_yaml_loads():
-    """config/sim_bridge.yaml loads into SimConfig with the contract's camera intrinsics."""
-    from icub_pmp.config import config_dir
+    """config/sim_bridge.yaml loads into SimConfig (every key a SimConfig field, no unknown
+    key) with the contract's camera intrinsics."""
+    from icub_pmp.config import config_dir, load_params_file
 
-    cfg = SimConfig.from_yaml(config_dir() / "sim_bridge.yaml", "sim_bridge")
+    cfg = SimConfig.from_dict(load_params_file(config_dir() / "sim_bridge.yaml", "sim_bridge"))
     assert (cfg.camera_width, cfg.camera_height, cfg.camera_fx, cfg.camera_cx,
             cfg.camera_cy) == (320, 240, 343.12, 160.0, 120.0)
     assert cfg.timestep == 0.001
