@@ -199,3 +199,23 @@ def test_sigkill_leaves_a_readable_bag(ros_domain_id, tmp_path):
     play = NodeProcess(command=[str(SCRIPTS / "replay.sh"), str(bag), "--rate", "20"])
     assert play.proc.wait(60) == 0, play.output()
     assert "not closed cleanly" in play.output()
+
+
+def test_record_with_sim_time_stamps_bag_time_from_clock(ros_domain_id, tmp_path):
+    """`record --use-sim-time` stamps messages with the /clock time (the simulator's), from the
+    first message on (the recorder's timers run on the wall clock, so it subscribes at once)."""
+    bag = tmp_path / "sim"
+    rec = _record(bag, "--use-sim-time", "/joint_states", "/clock")
+    traffic = _traffic("--duration", "1", "--no-cameras", "--no-reach", "--reliable",
+                       "--subscribers", "5")
+    assert traffic.proc.wait(60) == 0, traffic.output()
+    assert rec.stop(30) == 0, rec.output()
+    js = [m for m in BagReader(bag).messages(["/joint_states"])]
+    stamps = [deserialize_message(m.data, JointState).header.stamp for m in js]
+    ks = [s.sec * 1000 + s.nanosec // 1_000_000 for s in stamps]
+    assert ks == list(range(1000))
+    # log time = the latest /clock when the message was taken: sim time (0..1 s here, not the
+    # wall clock), behind the message's own stamp by at most a few ticks (the /clock of the
+    # same tick may be taken just after it), ahead of it by the queueing delay
+    lag_ms = [m.log_time / 1e6 - k for m, k in zip(js, ks)]
+    assert min(lag_ms) >= -5 and max(lag_ms) < 1000

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Sequence
 
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.context import Context
 from rclpy.duration import Duration
 from rclpy.event_handler import QoSMessageLostInfo, SubscriptionEventCallbacks
@@ -140,8 +141,13 @@ class BagRecorder(Node):
         self._skipped: set[str] = set()
         self._log = log or (lambda s: print(s, flush=True))
         self.started = time.monotonic()
-        self._discovery = self.create_timer(discovery_period, self.discover)
-        self._flusher = self.create_timer(min(0.25, writer.flush_interval / 2), self._flush)
+        # Wall-clock (steady) timers: with use_sim_time, ROS-time timers would not fire before
+        # the first /clock message, and topics would be subscribed late.
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._discovery = self.create_timer(discovery_period, self.discover, clock=steady)
+        self._flusher = self.create_timer(
+            min(0.25, writer.flush_interval / 2), self._flush, clock=steady
+        )
         self.discover()
 
     # ------------------------------------------------------------------ discovery
