@@ -112,6 +112,33 @@ def test_recorded_content_and_order(recorded):
     assert [e.response[0].success for e in events if e.response] == [True] * len(taus)
 
 
+def test_recorded_bag_opens_with_official_mcap_readers(recorded):
+    """The official mcap + mcap-ros2-support readers open the recorded bag from its index and
+    decode every message (service-event channels are read raw: that decoder's rosidl parser
+    rejects the generated '_Event' type names)."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    bag = recorded[0]
+    info = BagReader(bag).info()
+    (mcap_file,) = bag.glob("*.mcap")
+    decoded = raw_events = 0
+    with open(mcap_file, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        assert reader.get_summary().statistics.message_count == info.message_count
+        factory = DecoderFactory()
+        decoders = {}
+        for schema, channel, message in reader.iter_messages():
+            if schema.name.endswith("_Event"):
+                raw_events += 1
+                continue
+            if schema.id not in decoders:
+                decoders[schema.id] = factory.decoder_for(channel.message_encoding, schema)
+            decoders[schema.id](message.data)
+            decoded += 1
+    assert decoded + raw_events == info.message_count and decoded > 10_000
+
+
 def test_bag_metadata_has_offered_qos(recorded):
     """The publishers' offered QoS (as discovery reports it: reliability, durability, not the
     depth) is stored per topic, so a stock `ros2 bag play` republishes with it."""
