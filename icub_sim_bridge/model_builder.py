@@ -280,6 +280,9 @@ class ModelBuilder:
         tilt_body = head.add_body(name="eyes_tilt_link", pos=T[:3, 3], quat=_quat(T[:3, :3]))
         tilt_body.mass = 1e-3
         tilt_body.inertia = [1e-7, 1e-7, 1e-7]
+        tilt_body.ipos = [0.0, 0.0, 0.0]
+        tilt_body.iquat = [1.0, 0.0, 0.0, 0.0]
+        tilt_body.explicitinertial = True
         jt = tilt_body.add_joint(name="eyes_tilt", type=mujoco.mjtJoint.mjJNT_HINGE,
                                  axis=[0, 0, 1])
         jt.range = list(EYE_LIMITS["eyes_tilt"])
@@ -293,6 +296,9 @@ class ModelBuilder:
             eb = tilt_body.add_body(name=f"{prefix}_eye", pos=Te[:3, 3], quat=_quat(Te[:3, :3]))
             eb.mass = 1e-3
             eb.inertia = [1e-7, 1e-7, 1e-7]
+            eb.ipos = [0.0, 0.0, 0.0]
+            eb.iquat = [1.0, 0.0, 0.0, 0.0]
+            eb.explicitinertial = True
             pj = eb.add_joint(name=f"{prefix}_eye_pan", type=mujoco.mjtJoint.mjJNT_HINGE,
                               axis=[0, 0, 1])
             pj.range = list(EYE_LIMITS["pan"])
@@ -416,3 +422,17 @@ class ModelBuilder:
             b.ipos = [0.0, 0.0, 0.0]
             b.iquat = [1.0, 0.0, 0.0, 0.0]
             b.explicitinertial = True
+
+
+def main() -> None:
+    """Write the generated model to ``urdf/generated/icub_sim.xml`` (git-ignored) for
+    inspection: ``scripts/env.sh python -m icub_sim_bridge.model_builder``."""
+    from icub_pmp.config import repo_root
+
+    builder = ModelBuilder()
+    path = builder.write_xml(builder.build(), repo_root() / "urdf" / "generated" / "icub_sim.xml")
+    print(path)
+
+
+if __name__ == "__main__":
+    main()

@@ -46,6 +46,18 @@ def test_model_joints_and_actuators(sim):
     assert not any(j.startswith(("l_hip", "r_knee", "l_ankle")) for j in joints)
 
 
+def test_written_mjcf_loads(sim, tmp_path):
+    """The model written as MJCF (ModelBuilder.write_xml, meshes inline) loads back with the
+    same bodies, actuators, sensors and cameras."""
+    from icub_sim_bridge.model_builder import ModelBuilder
+
+    path = ModelBuilder(sim.config).write_xml(sim.built, tmp_path / "icub_sim.xml")
+    m = mujoco.MjModel.from_xml_path(str(path))
+    a = sim.model
+    assert (m.nbody, m.nu, m.nsensor, m.ncam, m.njnt) == (a.nbody, a.nu, a.nsensor, a.ncam,
+                                                          a.njnt)
+
+
 def test_joint_limits_match_pinocchio(sim, pin_model):
     """Joint limits [rad] of the 20 URDF joints equal pinocchio's (same URDF)."""
     idx = sim.indices(pin_model.joint_names)
