@@ -19,6 +19,9 @@ CORE_PACKAGES = [
     "icub_pmp.dynamics",
     "icub_pmp.cartesian",
     "icub_pmp.vision",
+    "icub_pmp.bags",
+    "icub_pmp.demo.bag_series",
+    "icub_pmp.demo.report",
     "icub_sim_bridge",
 ]
 # modules allowed to talk to ROS inside otherwise ROS-free packages
