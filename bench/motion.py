@@ -175,7 +175,7 @@ def main(argv: list[str] | None = None) -> dict:
     args = ap.parse_args(argv)
     cv2.setNumThreads(1)
     t_start = time.perf_counter()
-    n_moving, n_static, lead_in = (24, 75, 8) if args.quick else (60, 300, 10)
+    n_moving, n_static, lead_in = (20, 60, 8) if args.quick else (60, 300, 10)
     overrides = {k: yaml.safe_load(v) for k, v in (a.split("=", 1) for a in args.set)}
     config = MotionSegmenterConfig.from_dict({**MotionSegmenterConfig().to_dict(), **overrides})
     methods = tuple(m for m in args.methods.split(",") if m)

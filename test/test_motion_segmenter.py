@@ -190,9 +190,9 @@ def test_results_are_read_only():
 
 def test_shipped_yaml_loads():
     """config/motion_segmenter.yaml loads into MotionSegmenterConfig with motionCUT's grid,
-    window, pyramid, neighbour, persistence and blob-size defaults."""
+    pyramid, neighbour, persistence and blob-size defaults and the 13 px window."""
     c = MotionSegmenterConfig.from_yaml(config_dir() / "motion_segmenter.yaml", "motion_segmenter")
-    assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 15, 5)
+    assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 13, 5)
     assert (c.adj_nodes_thres, c.frames_persistence, c.blob_min_size) == (4, 3, 10)
     assert c == MotionSegmenterConfig()
 
