@@ -139,3 +139,18 @@ def test_reset_keeps_time_monotonic(sim):
     assert sim.time == t
     with pytest.raises(UnknownName):
         sim.reset("dance")
+
+
+def test_forearm_stops_on_the_chest(sim):
+    """Arms collide with the torso: swinging the left forearm inwards (shoulder yaw torque)
+    stops it on the chest, well before the joint limit, with a chest/forearm contact."""
+    sim.reset(q={"l_shoulder_pitch": -0.3, "l_shoulder_roll": 0.15, "l_shoulder_yaw": 0.6,
+                 "l_elbow": 1.85})
+    i = sim.indices(["l_shoulder_yaw"])[0]
+    sim.command(["l_shoulder_yaw"], [6.0])
+    sim.step(800)
+    m, d = sim.model, sim.data
+    pairs = {frozenset((m.geom(c.geom1).name, m.geom(c.geom2).name)) for c in d.contact[:d.ncon]}
+    assert frozenset(("chest_collision", "l_forearm_collision")) in pairs or \
+        frozenset(("chest_collision", "l_hand_collision")) in pairs
+    assert sim.joint_state().position[i] < sim.upper[i] - 0.15
