@@ -136,10 +136,26 @@ def node_rtf(domain: int, seconds: float, params: dict, helper: list[str]
                       file=sys.stderr)
 
 
+def _spin_until_interrupted(node) -> None:
+    """Spin ``node`` on an EventsExecutor (spin_once loop: its spin() ignores SIGINT)."""
+    import rclpy
+    from rclpy.experimental import EventsExecutor
+
+    ex = EventsExecutor()
+    ex.add_node(node)
+    try:
+        while rclpy.ok():
+            ex.spin_once(timeout_sec=0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
 def controller_main() -> None:
     """A trivial lockstep controller: PD to the first state, answers every /joint_states."""
     import rclpy
-    from rclpy.experimental import EventsExecutor
     from rclpy.node import Node
     from rclpy.qos import qos_profile_sensor_data
     from sensor_msgs.msg import JointState
@@ -162,23 +178,13 @@ def controller_main() -> None:
         pub.publish(out)
 
     node.create_subscription(JointState, "/joint_states", cb, qos_profile_sensor_data)
-    ex = EventsExecutor()
-    ex.add_node(node)
-    try:
-        while rclpy.ok():
-            ex.spin_once(timeout_sec=0.1)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    _spin_until_interrupted(node)
 
 
 def listener_main(cameras: bool) -> None:
     """Subscribe (no-op) to /joint_states, the 4 FT and optionally both images."""
     import rclpy
     from geometry_msgs.msg import WrenchStamped
-    from rclpy.experimental import EventsExecutor
     from rclpy.node import Node
     from rclpy.qos import qos_profile_sensor_data
     from sensor_msgs.msg import Image, JointState
@@ -197,16 +203,7 @@ def listener_main(cameras: bool) -> None:
         for side in ("left", "right"):
             node.create_subscription(Image, f"/cam/{side}/image_raw", cb,
                                      qos_profile_sensor_data)
-    ex = EventsExecutor()
-    ex.add_node(node)
-    try:
-        while rclpy.ok():
-            ex.spin_once(timeout_sec=0.1)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    _spin_until_interrupted(node)
 
 
 def main() -> None:
