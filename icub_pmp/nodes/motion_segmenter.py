@@ -190,6 +190,16 @@ class MotionSegmenterNode(Node):
 
     def _on_image(self, side: str, msg: Image) -> None:
         c = self.config
+        stamp = time_to_sec(msg.header.stamp)
+        last = self._latest[side]
+        if last is not None and stamp < last[0] - 0.5:
+            # time went back (simulation reset, bag loop): start this camera afresh
+            self.get_logger().info(f"/cam/{side}: time went back {last[0]:.3f} -> {stamp:.3f} s,"
+                                   " segmenter reset")
+            self.segmenters[side].reset()
+            self.trackers[side].reset()
+            self._latest[side] = None
+            self._paired_stamp = None
         try:
             img = image_to_array(msg, c.image_width, c.image_height)
             result = self.segmenters[side].process(img)
@@ -205,7 +215,6 @@ class MotionSegmenterNode(Node):
         self.pub_blobs[side].publish(
             blobs_to_msg(result, msg.header, c.image_width, c.image_height)
         )
-        stamp = time_to_sec(msg.header.stamp)
         self._latest[side] = (stamp, target)
         self._triangulate(stamp, msg)
 
