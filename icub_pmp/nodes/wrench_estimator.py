@@ -3,7 +3,7 @@ states and the arm FT sensors (stands in for wholeBodyDynamics; the core is
 :class:`icub_pmp.dynamics.WrenchEstimator`).
 
 subscribes /joint_states (JointState), /ft/l_arm_ft, /ft/r_arm_ft (WrenchStamped), /imu (Imu,
-           when ``gravity_source`` is ``imu``)
+           only while ``gravity_source`` is ``imu``)
 publishes  /estimated_joint_torques (JointState: name + effort [N m], stamp of the sample),
            /wrench_estimator/external_wrench/{left,right}_hand (WrenchStamped, hand frame
            ``l_hand_dh_frame`` / ``r_hand_dh_frame``), /wrench_estimator/external_wrench_root/
@@ -112,7 +112,8 @@ class WrenchEstimatorNode(Node):
         for h in HANDS:
             self.create_subscription(WrenchStamped, f"/ft/{_FT_TOPIC[h]}",
                                      lambda m, h=h: self._on_ft(h, m), sd)
-        self.create_subscription(Imu, "/imu", self._on_imu, sd)
+        self._imu_sub = None
+        self._update_imu_subscription()
         self.get_logger().info(
             f"wrench_estimator: {len(self.names)} joints, FT convention "
             f"{self.config.ft_convention}, gravity from {self.config.gravity_source}, "
@@ -136,7 +137,19 @@ class WrenchEstimatorNode(Node):
         except IcubPmpError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         self.config = cfg
+        self._update_imu_subscription()
         return SetParametersResult(successful=True)
+
+    def _update_imu_subscription(self) -> None:
+        """Subscribe to /imu only while the gravity comes from it (saves the 1 kHz traffic)."""
+        want = self.config.gravity_source == "imu"
+        if want and self._imu_sub is None:
+            self._imu_sub = self.create_subscription(Imu, "/imu", self._on_imu,
+                                                     qos_profile_sensor_data)
+        elif not want and self._imu_sub is not None:
+            self.destroy_subscription(self._imu_sub)
+            self._imu_sub = None
+            self._imu = None
 
     # ------------------------------------------------------------------ inputs
     def _warn(self, text: str) -> None:
