@@ -131,8 +131,8 @@ def test_reach_service_over_dds(node, ros_probe, model):
 
 
 def test_bad_goals_answer_false_and_node_survives(node, ros_probe):
-    """NaN target, unknown hand, duplicate hand, no hand, negative tau, unknown frame, a zero
-    quaternion with use_orientation, a malformed start_state: success=false with a message
+    """NaN target, unknown hand, duplicate hand, no hand, negative or huge tau, unknown frame,
+    a zero quaternion with use_orientation, a malformed start_state: success=false with a message
     naming the problem. An unreachable target answers success=false with its residual (the
     distance left), is not executed, and the node keeps serving."""
     assert ros_probe.wait_for_service("/pmp/reach", Reach, 90.0), node.output()
@@ -143,6 +143,7 @@ def test_bad_goals_answer_false_and_node_survives(node, ros_probe):
         "twice": request(hands=("right", "right")),
         "empty": request(hands=()),
         "tau": request(tau=-1.0),
+        "max_tau": request(tau=1e9),
     }
     req = request()
     req.right_target.header.frame_id = "no_such_frame"

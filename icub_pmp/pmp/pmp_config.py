@@ -27,6 +27,7 @@ class PmpConfig(ConfigBase):
 
     # timing (Sect. 2.4)
     tau: float = 2.0  # default TBG duration [s]
+    max_tau: float = 60.0  # longest TBG duration a goal may ask for [s]
     sample_period: float = 0.02  # time between trajectory points [s]
     time_parametrisation: str = "progress"  # "progress" (gamma of eq A5 normalised to 1) | "gamma"
     rotation_length_scale: float = 0.1  # [m/rad] orientation motion in the progress measure
@@ -73,9 +74,10 @@ class PmpConfig(ConfigBase):
     def validate(self) -> None:
         """Check ranges; raise :class:`ConfigError` naming the field."""
         positive = (
-            "tau", "sample_period", "rotation_length_scale", "rotation_stiffness", "initial_step",
-            "max_step", "convergence_tolerance", "rotation_tolerance", "success_tolerance",
-            "rotation_success_tolerance", "posture_field_decay", "settle_max_step",
+            "tau", "max_tau", "sample_period", "rotation_length_scale", "rotation_stiffness",
+            "initial_step", "max_step", "convergence_tolerance", "rotation_tolerance",
+            "success_tolerance", "rotation_success_tolerance", "posture_field_decay",
+            "settle_max_step",
         )
         for name in positive:
             v = getattr(self, name)
@@ -87,6 +89,8 @@ class PmpConfig(ConfigBase):
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:
                 raise ConfigError(f"PmpConfig.{name}: expected a finite value >= 0, got {v}")
+        if self.tau > self.max_tau:
+            raise ConfigError(f"PmpConfig.tau: {self.tau} s exceeds max_tau {self.max_tau} s")
         if self.time_parametrisation not in TIME_PARAMETRISATIONS:
             raise ConfigError(
                 f"PmpConfig.time_parametrisation: {self.time_parametrisation!r}; "

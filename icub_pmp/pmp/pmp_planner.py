@@ -126,6 +126,8 @@ class PmpPlanner:
         for h in goal.hands:
             if h not in HANDS:
                 raise UnknownName("hand", h, HANDS)
+        if goal.tau is not None and goal.tau > c.max_tau:
+            raise InvalidInput(f"tau: {goal.tau} s exceeds the planner's max_tau {c.max_tau} s")
         for j in tuple(goal.frozen_joints) + tuple(goal.joint_limits):
             if j not in self._names:
                 raise UnknownName("joint", j, self._names)
