@@ -414,6 +414,8 @@ def test_bad_goals_raise_clear_errors(planner, rest):
         ReachGoal(targets={"right": [0.0, 0.0, 0.0]}, tau=0.0)
     with pytest.raises(InvalidInput, match="no hand"):
         ReachGoal(targets={})
+    with pytest.raises(InvalidInput, match="farther"):
+        ReachGoal(targets={"left": [1e200, 0.0, 0.0]})
     with pytest.raises(InvalidInput, match="max_tau"):
         planner.plan(ReachGoal(targets={"right": [-0.3, 0.2, 0.0]}, tau=1e6), rest)
     with pytest.raises(UnknownName, match="head"):

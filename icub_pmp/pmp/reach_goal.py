@@ -13,7 +13,10 @@ from icub_pmp.errors import InvalidInput
 from icub_pmp.pmp.held_object import HeldObject
 from icub_pmp.pmp.obstacle_field import ObstacleField
 
-__all__ = ["ReachGoal"]
+__all__ = ["ReachGoal", "MAX_TARGET_DISTANCE"]
+
+#: targets with a coordinate beyond this [m] are rejected (numerically meaningless)
+MAX_TARGET_DISTANCE = 1.0e6
 
 
 def _frozen_vectors(name: str, d: Mapping[str, object] | None, shape: tuple[int, ...]):
@@ -63,6 +66,10 @@ class ReachGoal:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "targets", _frozen_vectors("targets", self.targets, (3,)))
+        for h, p in self.targets.items():
+            if float(np.max(np.abs(p))) > MAX_TARGET_DISTANCE:
+                raise InvalidInput(f"targets[{h!r}]: {p.tolist()} is farther than "
+                                   f"{MAX_TARGET_DISTANCE:g} m from the base frame")
         object.__setattr__(
             self, "orientations", _frozen_vectors("orientations", self.orientations, (3, 3))
         )
