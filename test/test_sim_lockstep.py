@@ -9,6 +9,7 @@ import numpy as np
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 
+from icub_interfaces.srv import ResetSim
 from icub_pmp.config import config_dir
 from icub_pmp.testing import NodeProcess, ros_environment
 
@@ -59,6 +60,9 @@ def test_lockstep_waits_for_the_answer(ros_domain_id, ros_probe):
         assert len(seen) == n  # no answer, no step (within the 3 s timeout)
         d = np.diff(sorted(set(seen)))
         assert np.all(d == 1_000_000)
+        # services are served while the loop waits (it spins the executor itself)
+        r = ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="rest"))
+        assert r.success, r.message
         node.destroy_subscription(sub)
         node.destroy_publisher(pub)
     finally:
