@@ -30,6 +30,7 @@ from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.service_introspection import ServiceIntrospectionState
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
@@ -94,7 +95,10 @@ class PmpPlannerNode(Node):
             self.get_logger().info(
                 f"posture memory ready ({self.config.posture_memory_size} postures, "
                 f"{time.perf_counter() - t0:.2f} s)")
-        self.create_service(Reach, "/pmp/reach", self._on_reach)
+        srv = self.create_service(Reach, "/pmp/reach", self._on_reach)
+        # requests and responses on /pmp/reach/_service_event, so bags record reach goals
+        srv.configure_introspection(
+            self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
         self.get_logger().info("serving /pmp/reach")
 
     # ------------------------------------------------------------------ parameters
