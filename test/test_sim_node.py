@@ -42,6 +42,22 @@ def bridge(ros_domain_id):
         assert rc == 0, proc.output()[-3000:]
 
 
+def _call(probe, service: str, srv_type, request, idempotent: bool = True):
+    """Call through one long-lived client per service. A fresh Fast DDS client can lose the
+    response of its very first call while its reply reader is still being matched; idempotent
+    requests are retried, a non-idempotent one must follow a warm-up call on its client."""
+    clients = probe.__dict__.setdefault("sim_clients", {})  # one probe per test
+    client = clients.get(service)
+    if client is None:
+        client = clients[service] = probe.node.create_client(srv_type, service)
+    assert client.wait_for_service(timeout_sec=60.0), service
+    for _ in range(3 if idempotent else 1):
+        future = client.call_async(request)
+        if probe.wait_for(future.done, 15.0):
+            return future.result()
+    raise TimeoutError(f"{service}: no answer")
+
+
 def _wait_up(probe, proc: NodeProcess) -> None:
     assert probe.wait_for_topic("/joint_states", timeout=60.0), proc.output()[-3000:]
 
@@ -120,7 +136,7 @@ def test_bad_commands_rejected_node_keeps_running(bridge, ros_probe):
     assert ros_probe.wait_for(lambda: (pub.publish(ok), _effort(ros_probe, "l_elbow"))[1]
                               == 20.0, 20.0)
     assert bridge.alive()
-    resp = ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="rest"))
+    resp = _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="rest"))
     assert resp.success, resp.message
     ros_probe.node.destroy_publisher(pub)
 
@@ -130,33 +146,33 @@ def test_services(bridge, ros_probe):
     follows; unknown objects refused), apply_wrench (ground-truth hand wrench shows it),
     set_paused (the clock stops and resumes)."""
     _wait_up(ros_probe, bridge)
-    r = ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="dance"))
+    r = _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="dance"))
     assert not r.success and "rest" in r.message
     pose = Pose()
     pose.position.x, pose.position.y, pose.position.z = -0.5, -0.2, -0.05
     pose.orientation.w = 1.0
-    r = ros_probe.call("/sim/set_object_pose", SetObjectPose,
-                       SetObjectPose.Request(name="box", pose=pose))
+    r = _call(ros_probe, "/sim/set_object_pose", SetObjectPose,
+              SetObjectPose.Request(name="box", pose=pose))
     assert r.success, r.message
     gt = ros_probe.collect("/ground_truth/objects/box", PoseStamped, 5)[-1]
     assert (gt.pose.position.x, gt.pose.position.y) == pytest.approx((-0.5, -0.2), abs=1e-3)
-    r = ros_probe.call("/sim/set_object_pose", SetObjectPose,
-                       SetObjectPose.Request(name="ball", pose=pose))
+    r = _call(ros_probe, "/sim/set_object_pose", SetObjectPose,
+              SetObjectPose.Request(name="ball", pose=pose))
     assert not r.success and "box" in r.message
+    r = _call(ros_probe, "/sim/apply_wrench", ApplyWrench,
+              ApplyWrench.Request(target="nowhere", duration=1.0))  # also warms the client up
+    assert not r.success and "nowhere" in r.message
     req = ApplyWrench.Request(target="r_hand_dh_frame", duration=30.0)
     req.wrench.force.z = -3.0
-    r = ros_probe.call("/sim/apply_wrench", ApplyWrench, req)
+    r = _call(ros_probe, "/sim/apply_wrench", ApplyWrench, req, idempotent=False)
     assert r.success, r.message
     w = ros_probe.collect("/ground_truth/contact_wrench/right_hand", WrenchStamped, 5)[-1]
     assert w.wrench.force.z == pytest.approx(-3.0, abs=1e-6)
-    r = ros_probe.call("/sim/apply_wrench", ApplyWrench,
-                       ApplyWrench.Request(target="nowhere", duration=1.0))
-    assert not r.success and "nowhere" in r.message
-    assert ros_probe.call("/sim/set_paused", SetBool, SetBool.Request(data=True)).success
+    assert _call(ros_probe, "/sim/set_paused", SetBool, SetBool.Request(data=True)).success
     assert ros_probe.collect("/joint_states", JointState, 1, timeout=1.0) == []  # paused
-    assert ros_probe.call("/sim/set_paused", SetBool, SetBool.Request(data=False)).success
+    assert _call(ros_probe, "/sim/set_paused", SetBool, SetBool.Request(data=False)).success
     assert len(ros_probe.collect("/joint_states", JointState, 5)) == 5
-    assert ros_probe.call("/sim/reset", ResetSim, ResetSim.Request(posture="")).success
+    assert _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="")).success
 
 
 def test_runtime_parameters_validated(bridge, ros_probe):
@@ -171,7 +187,7 @@ def test_runtime_parameters_validated(bridge, ros_probe):
         else:
             v = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value)
         req = SetParameters.Request(parameters=[Parameter(name=name, value=v)])
-        return ros_probe.call("/sim_bridge/set_parameters", SetParameters, req).results[0]
+        return _call(ros_probe, "/sim_bridge/set_parameters", SetParameters, req).results[0]
 
     _wait_up(ros_probe, bridge)
     r = set_param("mode", "warp")
