@@ -248,14 +248,16 @@ def test_hold_service_and_estimate_watchdog(graph, probe):
 
 
 def test_joint_state_watchdog_trips_safe_hold():
-    """A controller alone (wall clock, own domain) fed joint states that then stop trips its
-    watchdog to a safe hold with a warning, and resumes when joint states come back."""
+    """A free-running controller alone (timer at 1 kHz, wall clock, own domain) publishes
+    effort commands on the joint states it is fed; when they stop its watchdog trips to a
+    safe hold with a warning, and it resumes when joint states come back."""
     with reserve_domain_id() as did:
         _watchdog(did)
 
 
 def _watchdog(did: int) -> None:
-    proc = NodeProcess(command=[str(repo_root() / "scripts/impedance_controller.sh")],
+    proc = NodeProcess(command=[str(repo_root() / "scripts/impedance_controller.sh"),
+                                "--ros-args", "-p", "lockstep:=false"],
                        env=ros_environment(did))
     probe = RosProbe(did, "watchdog_probe")
     try:
@@ -273,8 +275,13 @@ def _watchdog(did: int) -> None:
                 pub.publish(m)
                 time.sleep(0.005)
 
+        got: list[JointState] = []
+        sub = probe.node.create_subscription(JointState, "/effort_command", got.append,
+                                             qos_profile_sensor_data)
         send(40)
         assert proc.wait_for_output("safe hold", 20.0), proc.output()[-2000:]
+        probe.node.destroy_subscription(sub)
+        assert len(got) > 20 and len(got[-1].effort) == len(spec.actuated_joints)
         send(20)
         assert proc.wait_for_output("joint states are back", 20.0), proc.output()[-2000:]
     finally:

@@ -13,24 +13,27 @@ services   /impedance_controller/hold (std_srvs/Trigger): stop every motion, hol
            measured posture
 
 Stepping: with ``lockstep`` every /joint_states message is answered at once (with
-``wait_for_estimate`` only once the estimate of the same stamp has arrived), so the 1 kHz
-loop is exact in simulated time; otherwise a timer at ``rate_hz`` steps on the latest joint
-state. Trajectories start at their header stamp (0 = now, a past stamp = now) in the time of
-the joint states. Bad input (NaN, unknown joints, non-increasing times, points beyond the
-joint limits, missing joints) is dropped with a warning; the controller keeps running.
-Watchdogs: a 20 Hz timer on the node clock (sim time with ``use_sim_time``) trips the safe
-hold when no joint state came for ``state_timeout``; estimates older than
-``estimate_timeout`` switch the torque loop off; both are logged. All
-:class:`ImpedanceControllerConfig` parameters can change at run time (validated).
+``wait_for_estimate`` only once the estimate of the same stamp has arrived, or after
+``estimate_timeout`` of wall time without it), so the 1 kHz loop is exact in simulated
+time; otherwise a timer at ``rate_hz`` steps on the latest joint state. Trajectories start
+at their header stamp (0 = now, a past stamp = now) in the time of the joint states. Bad
+input (NaN, unknown joints, non-increasing times, points beyond the joint limits, missing
+joints) is dropped with a warning; the controller keeps running. Watchdogs: a 20 Hz timer on
+the node clock (sim time with ``use_sim_time``) trips the safe hold when no joint state came
+for ``state_timeout``; estimates older than ``estimate_timeout`` switch the torque loop off;
+both are logged. All :class:`ImpedanceControllerConfig` parameters can change at run time
+(validated).
 """
 
 from __future__ import annotations
 
 import array
+import time
 
 import numpy as np
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
@@ -74,6 +77,7 @@ class ImpedanceControllerNode(Node):
         self._est_ns = -1
         self._pending: tuple[int, object, np.ndarray, np.ndarray] | None = None
         self._latest: tuple[float, np.ndarray, np.ndarray] | None = None
+        self._latest_new = False
         self._t_last: float | None = None
         self._status = "no_estimate"
         self.steps = 0
@@ -95,6 +99,11 @@ class ImpedanceControllerNode(Node):
                                  self._on_velocity, _TRAJ_QOS)
         self.create_service(Trigger, "/impedance_controller/hold", self._on_hold)
         self.create_timer(0.05, self._on_watchdog)
+        # wall-clock timer: a joint state waiting for its estimate is answered without it
+        # after estimate_timeout of wall time (the simulator waits for us: sim time stands)
+        self._pending_since = 0.0
+        self.create_timer(0.005, self._on_pending_timeout,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._timer = None
         self._apply_stepping(config)
         self.get_logger().info(
@@ -150,9 +159,11 @@ class ImpedanceControllerNode(Node):
         cfg = self.controller.config
         if not cfg.lockstep:
             self._latest = (ns * 1e-9, q, v)
+            self._latest_new = True
             return
         if cfg.wait_for_estimate and cfg.torque_loop and self._est_ns < ns:
             self._pending = (ns, stamp, q, v)
+            self._pending_since = time.monotonic()
             return
         self._step(ns * 1e-9, q, v, stamp)
 
@@ -216,10 +227,21 @@ class ImpedanceControllerNode(Node):
 
     # ------------------------------------------------------------------ stepping
     def _on_timer(self) -> None:
-        if self._latest is None or self.controller.safe_hold:
+        # free-running: step on the latest joint state; in safe hold, wait for a new one
+        if self._latest is None or (self.controller.safe_hold and not self._latest_new):
             return
+        self._latest_new = False
         t, q, v = self._latest
         self._step(t, q, v, self.get_clock().now().to_msg())
+
+    def _on_pending_timeout(self) -> None:
+        p = self._pending
+        if p is None:
+            return
+        if time.monotonic() - self._pending_since > self.controller.config.estimate_timeout:
+            self._pending = None
+            self._warn("no estimate for the pending joint state: answered without it")
+            self._step(p[0] * 1e-9, p[2], p[3], p[1])
 
     def _on_watchdog(self) -> None:
         now = self.get_clock().now().nanoseconds * 1e-9
