@@ -362,9 +362,32 @@ class ModelBuilder:
                          objname="head_imu_0")
 
     # ------------------------------------------------------------------ scene
+    @staticmethod
+    def _add_textured_material(s: mujoco.MjSpec, name: str, rgb1: list[float],
+                               rgb2: list[float], cube: bool, repeat: float) -> str:
+        """A procedural checker texture with random speckles (MuJoCo builtin, nothing
+        downloaded): surfaces need texture for Lucas-Kanade tracking (motion segmenter)."""
+        tex = s.add_texture(
+            name=f"scene_{name}_tex",
+            type=mujoco.mjtTexture.mjTEXTURE_CUBE if cube else mujoco.mjtTexture.mjTEXTURE_2D,
+            builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, rgb1=rgb1, rgb2=rgb2,
+            width=128, height=128, mark=mujoco.mjtMark.mjMARK_RANDOM, random=0.25,
+            markrgb=[0.5 * c for c in rgb2])
+        mat = s.add_material(name=f"scene_{name}_mat")
+        mat.textures[int(mujoco.mjtTextureRole.mjTEXROLE_RGB)] = tex.name
+        mat.texrepeat = [repeat, repeat]
+        mat.texuniform = not cube
+        return mat.name
+
     def _add_scene(self, s: mujoco.MjSpec) -> None:
         cfg = self.config
         wb = s.worldbody
+        table_mat = self._add_textured_material(
+            s, "table", [0.62, 0.47, 0.3], [0.52, 0.38, 0.23], cube=False, repeat=12.0)
+        box_mat = self._add_textured_material(
+            s, "box", [0.85, 0.1, 0.1], [0.6, 0.05, 0.05], cube=True, repeat=1.0)
+        cyl_mat = self._add_textured_material(
+            s, "cylinder", [0.1, 0.3, 0.85], [0.05, 0.15, 0.55], cube=True, repeat=1.0)
         light = wb.add_light(name="sun", pos=[-0.5, 0.0, 1.5], dir=[0.3, 0.0, -1.0])
         light.castshadow = False
         light.diffuse = [0.6, 0.6, 0.6]
@@ -383,7 +406,7 @@ class ModelBuilder:
         table = wb.add_body(name="table", pos=[tx, ty, tz])
         top = table.add_geom(name="table_top", type=mujoco.mjtGeom.mjGEOM_BOX,
                              size=[dx / 2, dy / 2, th / 2], pos=[0, 0, -th / 2],
-                             rgba=[0.62, 0.47, 0.3, 1])
+                             rgba=[1, 1, 1, 1], material=table_mat)
         top.contype = top.conaffinity = _BIT_WORLD
         top.friction = [cfg.object_friction, 0.005, 0.0001]
         top.group = GROUP_OBJECTS
@@ -399,12 +422,13 @@ class ModelBuilder:
         box = wb.add_body(name="box", pos=list(cfg.box_position))
         box.add_freejoint(name="box_freejoint")
         bg = box.add_geom(name="box_geom", type=mujoco.mjtGeom.mjGEOM_BOX,
-                          size=[v / 2 for v in cfg.box_size], rgba=[0.85, 0.1, 0.1, 1])
+                          size=[v / 2 for v in cfg.box_size], rgba=[1, 1, 1, 1],
+                          material=box_mat)
         cyl = wb.add_body(name="cylinder", pos=list(cfg.cylinder_position))
         cyl.add_freejoint(name="cylinder_freejoint")
         cg = cyl.add_geom(name="cylinder_geom", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                           size=[cfg.cylinder_radius, cfg.cylinder_height / 2, 0],
-                          rgba=[0.1, 0.3, 0.85, 1])
+                          rgba=[1, 1, 1, 1], material=cyl_mat)
         for g in (bg, cg):
             g.contype = _BIT_WORLD | _BIT_ARM
             g.conaffinity = _BIT_WORLD | _BIT_ARM
