@@ -43,6 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
 from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
+from icub_pmp.control.sim_scenarios import track_min_jerk  # noqa: E402
 from icub_sim_bridge.sim_config import SimConfig  # noqa: E402
 from icub_sim_bridge.simulator import Simulator  # noqa: E402
 
@@ -90,37 +91,18 @@ def cpu_time_per_step(loop: SimLoop, n: int = 2000) -> float:
     return (time.thread_time_ns() - t0) / n / 1e3
 
 
-def _min_jerk(q0, q1, T, t):
-    s = np.clip(t / T, 0.0, 1.0)
-    return (q0 + (q1 - q0) * (10 * s**3 - 15 * s**4 + 6 * s**5),
-            (q1 - q0) * (30 * s**2 - 60 * s**3 + 30 * s**4) / T)
-
-
 def bench_tracking(sim: Simulator) -> dict:
     """2 s minimum-jerk joint move in position mode (the test's trajectory)."""
     sim.reset("rest")
     loop = SimLoop(ImpedanceControllerConfig(mode="position", feedforward="inverse_dynamics"),
                    sim=sim)
     loop.run(0.05)
-    c = loop.controller
-    names = ["torso_yaw", "r_shoulder_pitch", "r_shoulder_roll", "r_shoulder_yaw", "r_elbow",
-             "r_wrist_prosup", "l_elbow"]
-    idx = c.indices(names)
-    q0 = sim.joint_state().position[idx].copy()
-    q1 = q0 + np.radians([20, -30, 20, 25, 35, 30, 20])
-    ts = np.arange(1, 41) * 0.05
-    pos = np.array([_min_jerk(q0, q1, 2.0, t)[0] for t in ts])
-    vel = np.array([_min_jerk(q0, q1, 2.0, t)[1] for t in ts])
-    t0 = loop.t
-    c.set_trajectory(c.make_trajectory(names, ts, pos, vel, start=t0), t0)
-    steps = loop.run(2.3)
-    err = np.array([s.q[idx] - _min_jerk(q0, q1, 2.0, s.t - t0)[0] for s in steps])
-    moving = err[:2000]
+    r = track_min_jerk(loop)
     return {
-        "tracking_rms_deg": float(np.degrees(np.sqrt(np.mean(moving**2)))),
-        "tracking_max_deg": float(np.degrees(np.abs(moving).max())),
-        "tracking_final_deg": float(np.degrees(np.abs(err[-1]).max())),
-        "tracking_saturated_steps": int(sum(s.control.saturated.any() for s in steps)),
+        "tracking_rms_deg": r.rms_deg,
+        "tracking_max_deg": r.max_deg,
+        "tracking_final_deg": r.final_deg,
+        "tracking_saturated_steps": r.saturated_steps,
     }
 
 

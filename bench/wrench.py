@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 import time
@@ -44,6 +43,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
 from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
+from icub_pmp.control.sim_scenarios import (  # noqa: E402
+    press_left_hand_on_table,
+    raised_posture,
+    start_periodic_motion,
+)
 from icub_pmp.dynamics.ft_dynamics_model import FtDynamicsModel  # noqa: E402
 from icub_pmp.dynamics.random_features_ridge import RandomFeaturesRidge  # noqa: E402
 from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig  # noqa: E402
@@ -57,34 +61,13 @@ def _load() -> str:
     return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
-def _raised(sim: Simulator) -> dict[str, float]:
-    q = dict(sim.spec.posture("rest"))
-    for s in "lr":
-        q.update({f"{s}_shoulder_pitch": math.radians(-60), f"{s}_shoulder_roll":
-                  math.radians(35), f"{s}_elbow": math.radians(80)})
-    return q
-
-
 def periodic_motion(sim: Simulator, seconds: float) -> tuple[SimLoop, list, float]:
     """Contact-free periodic motion of both arms; returns the loop, its steps, start time."""
-    sim.reset(q=_raised(sim))
+    sim.reset(q=raised_posture(sim.spec))
     loop = SimLoop(ImpedanceControllerConfig(mode="position", feedforward="inverse_dynamics"),
                    sim=sim)
     loop.run(0.02)
-    c = loop.controller
-    names = [f"{s}_{j}" for s in "lr" for j in
-             ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow", "wrist_prosup")]
-    idx = c.indices(names)
-    q0 = sim.joint_state().position[idx].copy()
-    amp = np.radians([15, 10, 15, 20, 30] * 2)
-    freq = np.array([0.5, 0.37, 0.61, 0.53, 0.71, 0.47, 0.41, 0.59, 0.51, 0.67])
-    ts = np.arange(1, int(seconds / 0.02) + 1) * 0.02
-    r = np.clip(ts / 1.0, 0.0, 1.0)
-    ramp = (10 * r**3 - 15 * r**4 + 6 * r**5)[:, None]
-    pos = q0 + ramp * amp * np.sin(2 * np.pi * freq * ts[:, None])
-    vel = np.gradient(pos, ts, axis=0)
-    t0 = loop.t
-    c.set_trajectory(c.make_trajectory(names, ts, pos, vel, start=t0), t0)
+    t0 = start_periodic_motion(loop, seconds)
     loop.record_timing = True
     steps = loop.run(seconds)
     return loop, steps, t0
@@ -116,10 +99,7 @@ def external_force(sim: Simulator) -> dict:
     sim.reset("rest")
     loop = SimLoop(ImpedanceControllerConfig(mode="impedance"), sim=sim)
     loop.run(0.05)
-    c = loop.controller
-    names = ["l_shoulder_pitch", "l_elbow"]
-    q = sim.joint_state().position[c.indices(names)]
-    c.set_trajectory(c.make_trajectory(names, [1.0], [q + np.radians([12.0, -25.0])]), loop.t)
+    press_left_hand_on_table(loop)
     steps = loop.run(2.0)[-500:]
     errs["table"] = [100 * np.linalg.norm(s.estimate.ext_root["left"][:3] -
                                           s.ground_truth["left"][:3]) /

@@ -9,6 +9,7 @@ import pytest
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.control.sim_loop import SimLoop
+from icub_pmp.control.sim_scenarios import track_min_jerk
 from icub_sim_bridge.sim_config import SimConfig
 from icub_sim_bridge.simulator import Simulator
 
@@ -21,12 +22,6 @@ def sim() -> Simulator:
 def _loop(sim: Simulator, **kw) -> SimLoop:
     sim.reset("rest")
     return SimLoop(ImpedanceControllerConfig(**kw), sim=sim)
-
-
-def _min_jerk(q0, q1, T, t):
-    s = np.clip(t / T, 0.0, 1.0)
-    return (q0 + (q1 - q0) * (10 * s**3 - 15 * s**4 + 6 * s**5),
-            (q1 - q0) * (30 * s**2 - 60 * s**3 + 30 * s**4) / T)
 
 
 def test_holds_posture_against_gravity(sim):
@@ -72,23 +67,10 @@ def test_tracks_a_minimum_jerk_trajectory(sim):
     feed-forward: RMS error < 1 deg during the motion, final error < 0.5 deg 0.3 s after."""
     loop = _loop(sim, mode="position", feedforward="inverse_dynamics")
     loop.run(0.05)
-    c = loop.controller
-    names = ["torso_yaw", "r_shoulder_pitch", "r_shoulder_roll", "r_shoulder_yaw", "r_elbow",
-             "r_wrist_prosup", "l_elbow"]
-    idx = c.indices(names)
-    q0 = sim.joint_state().position[idx].copy()
-    q1 = q0 + np.radians([20, -30, 20, 25, 35, 30, 20])
-    ts = np.arange(1, 41) * 0.05
-    pos = np.array([_min_jerk(q0, q1, 2.0, t)[0] for t in ts])
-    vel = np.array([_min_jerk(q0, q1, 2.0, t)[1] for t in ts])
-    t0 = loop.t
-    c.set_trajectory(c.make_trajectory(names, ts, pos, vel, start=t0), t0)
-    steps = loop.run(2.3)
-    err = np.array([s.q[idx] - _min_jerk(q0, q1, 2.0, s.t - t0)[0] for s in steps])
-    moving = err[:2000]
-    assert np.degrees(np.sqrt(np.mean(moving**2))) < 1.0
-    assert np.degrees(np.abs(err[-1]).max()) < 0.5
-    assert not any(s.control.saturated.any() for s in steps)
+    r = track_min_jerk(loop)
+    assert r.rms_deg < 1.0
+    assert r.final_deg < 0.5
+    assert r.saturated_steps == 0
 
 
 def test_velocity_mode_moves_at_the_commanded_rate(sim):

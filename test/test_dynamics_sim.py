@@ -4,13 +4,16 @@ external hand wrenches vs the simulator's ground truth, contact flags."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.control.sim_loop import SimLoop
+from icub_pmp.control.sim_scenarios import (
+    press_left_hand_on_table,
+    raised_posture,
+    start_periodic_motion,
+)
 from icub_sim_bridge.sim_config import SimConfig
 from icub_sim_bridge.simulator import Simulator
 
@@ -22,43 +25,21 @@ def sim() -> Simulator:
     return Simulator(SimConfig(cameras_enabled=False))
 
 
-def _raised(sim: Simulator) -> dict[str, float]:
-    """Rest posture with both forearms raised clear of the table and the objects."""
-    q = dict(sim.spec.posture("rest"))
-    for s in "lr":
-        q.update({f"{s}_shoulder_pitch": math.radians(-60), f"{s}_shoulder_roll":
-                  math.radians(35), f"{s}_elbow": math.radians(80)})
-    return q
-
-
 def _force_ok(est: np.ndarray, truth: np.ndarray) -> bool:
     """Within 5 % of the true force or 0.1 N, whichever is larger."""
     return bool(np.linalg.norm(est - truth) <= max(0.05 * np.linalg.norm(truth), 0.1))
 
 
 def test_ft_prediction_during_contact_free_motion(sim):
-    """Table 1 analogue: both arms move periodically (10 joints, 0.4-0.7 Hz, 10-30 deg) with
+    """Table 1 analogue: both arms move periodically (10 joints, 0.37-0.71 Hz, 10-30 deg) with
     no contact; the FT wrench predicted by RNEA with null hand wrenches matches the measured
     one: |mean error| < 0.02 N / 0.005 N m and std < 0.15 N / 0.05 N m per axis (measured
     here: std <= 0.06 N and 0.025 N m), and no contact is flagged."""
-    sim.reset(q=_raised(sim))
+    sim.reset(q=raised_posture(sim.spec))
     loop = SimLoop(ImpedanceControllerConfig(mode="position", feedforward="inverse_dynamics"),
                    sim=sim)
     loop.run(0.02)
-    c = loop.controller
-    names = [f"{s}_{j}" for s in "lr" for j in
-             ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow", "wrist_prosup")]
-    idx = c.indices(names)
-    q0 = sim.joint_state().position[idx].copy()
-    amp = np.radians([15, 10, 15, 20, 30] * 2)
-    freq = np.array([0.5, 0.4, 0.6, 0.5, 0.7] * 2)
-    ts = np.arange(1, 161) * 0.02
-    r = np.clip(ts / 1.0, 0.0, 1.0)
-    ramp = (10 * r**3 - 15 * r**4 + 6 * r**5)[:, None]  # smooth start of the oscillation
-    pos = q0 + ramp * amp * np.sin(2 * np.pi * freq * ts[:, None])
-    vel = np.gradient(pos, ts, axis=0)
-    t0 = loop.t
-    c.set_trajectory(c.make_trajectory(names, ts, pos, vel, start=t0), t0)
+    t0 = start_periodic_motion(loop, 3.0)
     steps = loop.run(3.0)
     window = [s for s in steps if 1.2 <= s.t - t0 <= 3.0]
     for h in HANDS:
@@ -97,10 +78,7 @@ def test_hand_pressing_on_the_table(sim):
     sim.reset("rest")
     loop = SimLoop(ImpedanceControllerConfig(mode="impedance"), sim=sim)
     loop.run(0.05)
-    c = loop.controller
-    names = ["l_shoulder_pitch", "l_elbow"]
-    q = sim.joint_state().position[c.indices(names)]
-    c.set_trajectory(c.make_trajectory(names, [1.0], [q + np.radians([12.0, -25.0])]), loop.t)
+    press_left_hand_on_table(loop)
     steps = loop.run(2.0)
     pressed = [s for s in steps[-300:]]
     gt = np.array([s.ground_truth["left"][:3] for s in pressed])

@@ -31,11 +31,8 @@ import array
 import time
 
 import numpy as np
-import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException
-from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from sensor_msgs.msg import JointState
@@ -51,6 +48,7 @@ from icub_pmp.nodes.conversions import (
     trajectory_extras,
     trajectory_to_arrays,
 )
+from icub_pmp.nodes.node_runner import spin_node
 
 __all__ = ["ImpedanceControllerNode", "main"]
 
@@ -283,29 +281,8 @@ class ImpedanceControllerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Entry point (``ros2 run icub_pmp impedance_controller``).
-
-    Spins an ``EventsExecutor`` (several times the message throughput of the default one)
-    with ``spin_once`` in a loop: its ``spin()`` does not process callbacks in the Jazzy
-    wheel.
-    """
-    rclpy.init(args=args)
-    node = None
-    executor = None
-    try:
-        node = ImpedanceControllerNode()
-        executor = EventsExecutor()
-        executor.add_node(node)
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        if executor is not None:
-            executor.shutdown()
-        rclpy.try_shutdown()
+    """Entry point (``ros2 run icub_pmp impedance_controller``)."""
+    spin_node(ImpedanceControllerNode, args)
 
 
 if __name__ == "__main__":

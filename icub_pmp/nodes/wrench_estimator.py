@@ -32,11 +32,8 @@ from __future__ import annotations
 import array
 
 import numpy as np
-import rclpy
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
-from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Imu, JointState
@@ -47,6 +44,7 @@ from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.nodes.conversions import joint_state_arrays, set_wrench, wrench_to_array
+from icub_pmp.nodes.node_runner import spin_node
 
 __all__ = ["WrenchEstimatorNode", "main"]
 
@@ -259,29 +257,8 @@ class WrenchEstimatorNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Entry point (``ros2 run icub_pmp wrench_estimator``).
-
-    Spins an ``EventsExecutor`` (several times the message throughput of the default one)
-    with ``spin_once`` in a loop: its ``spin()`` does not process callbacks in the Jazzy
-    wheel.
-    """
-    rclpy.init(args=args)
-    node = None
-    executor = None
-    try:
-        node = WrenchEstimatorNode()
-        executor = EventsExecutor()
-        executor.add_node(node)
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        if executor is not None:
-            executor.shutdown()
-        rclpy.try_shutdown()
+    """Entry point (``ros2 run icub_pmp wrench_estimator``)."""
+    spin_node(WrenchEstimatorNode, args)
 
 
 if __name__ == "__main__":
