@@ -8,6 +8,7 @@ message that the node logs (throttled) before dropping the message.
 from __future__ import annotations
 
 import math
+import struct
 from typing import Iterable, Sequence
 
 import numpy as np
@@ -30,6 +31,7 @@ __all__ = [
     "joint_state_arrays",
     "set_wrench",
     "trajectory_extras",
+    "raw_header_stamp_ns",
     "wrench_to_array",
     "array_to_wrench",
     "point_to_array",
@@ -161,6 +163,17 @@ def joint_state_arrays(
     if not math.isfinite(float(q.sum())):
         raise InvalidInput("JointState.position contains NaN or infinite values")
     return q, v, index
+
+
+def raw_header_stamp_ns(data: bytes) -> int:
+    """``header.stamp`` [ns] of a serialised (CDR) message whose first field is a
+    std_msgs/Header (JointState, WrenchStamped, ...), read without deserialising it: a
+    subscriber with ``raw=True`` can drop the samples it does not need for free."""
+    if len(data) < 12:
+        raise InvalidInput(f"serialised message too short ({len(data)} bytes) for a header")
+    fmt = "<iI" if data[1] & 1 else ">iI"  # CDR encapsulation: odd id = little endian
+    sec, nanosec = struct.unpack_from(fmt, data, 4)
+    return sec * 1_000_000_000 + nanosec
 
 
 # ---------------------------------------------------------------------------- geometry

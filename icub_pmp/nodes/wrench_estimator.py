@@ -36,6 +36,7 @@ from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Bool
 
@@ -43,7 +44,12 @@ from icub_pmp.dynamics.wrench_estimator import WrenchEstimator
 from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.kinematics.robot_spec import HANDS
-from icub_pmp.nodes.conversions import joint_state_arrays, set_wrench, wrench_to_array
+from icub_pmp.nodes.conversions import (
+    joint_state_arrays,
+    raw_header_stamp_ns,
+    set_wrench,
+    wrench_to_array,
+)
 from icub_pmp.nodes.node_runner import spin_node
 
 __all__ = ["WrenchEstimatorNode", "main"]
@@ -53,10 +59,6 @@ _LIVE = {"rfrr_enabled", "rfrr_learning", "contact_force_on", "contact_force_off
          "contact_min_samples", "require_same_stamp", "stale_timeout", "publish_every"}
 _FT_TOPIC = {"left": "l_arm_ft", "right": "r_arm_ft"}
 _BUFFER = 64  # samples kept while waiting for the matching messages
-
-
-def _ns(stamp) -> int:
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 class WrenchEstimatorNode(Node):
@@ -106,10 +108,13 @@ class WrenchEstimatorNode(Node):
             self._pred_msg[h].header.frame_id = _FT_TOPIC[h]
         self._bool = {h: Bool() for h in HANDS}
 
-        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd)
+        # raw subscriptions: the stamp is read from the CDR bytes and only the samples that
+        # are processed get deserialised (sample_every > 1 then costs little)
+        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd,
+                                 raw=True)
         for h in HANDS:
             self.create_subscription(WrenchStamped, f"/ft/{_FT_TOPIC[h]}",
-                                     lambda m, h=h: self._on_ft(h, m), sd)
+                                     lambda m, h=h: self._on_ft(h, m), sd, raw=True)
         self._imu_sub = None
         self._update_imu_subscription()
         self.get_logger().info(
@@ -154,14 +159,19 @@ class WrenchEstimatorNode(Node):
         self.dropped += 1
         self.get_logger().warning(text, throttle_duration_sec=2.0)
 
-    def _on_ft(self, hand: str, msg: WrenchStamped) -> None:
-        w = wrench_to_array(msg.wrench)
-        if not np.all(np.isfinite(w)):
-            self._warn(f"/ft/{_FT_TOPIC[hand]}: NaN or infinite wrench dropped")
+    def _stamp(self, data: bytes, topic: str) -> int | None:
+        try:
+            return raw_header_stamp_ns(data)
+        except IcubPmpError as exc:
+            self._warn(f"{topic}: message dropped: {exc}")
+            return None
+
+    def _on_ft(self, hand: str, data: bytes) -> None:
+        ns = self._stamp(data, f"/ft/{_FT_TOPIC[hand]}")
+        if ns is None:
             return
-        ns = _ns(msg.header.stamp)
         buf = self._ft[hand]
-        buf[ns] = w
+        buf[ns] = data
         if len(buf) > _BUFFER:
             del buf[min(buf)]
         if self.config.require_same_stamp and ns in self._js:
@@ -173,10 +183,12 @@ class WrenchEstimatorNode(Node):
         if np.all(np.isfinite(acc)):
             self._imu = acc
 
-    def _on_joint_state(self, msg: JointState) -> None:
-        ns = _ns(msg.header.stamp)
+    def _on_joint_state(self, data: bytes) -> None:
+        ns = self._stamp(data, "/joint_states")
+        if ns is None:
+            return
         if self.config.require_same_stamp:
-            self._js[ns] = msg
+            self._js[ns] = data
             if len(self._js) > _BUFFER:
                 del self._js[min(self._js)]
             self._try(ns)
@@ -193,7 +205,7 @@ class WrenchEstimatorNode(Node):
                                "older than the joint states): sample skipped")
                     return
                 ft[h] = buf[last]
-            self._process(ns, msg, ft)
+            self._process(ns, data, ft)
 
     def _try(self, ns: int) -> None:
         """Process stamp ``ns`` if the joint state and both FT wrenches are there."""
@@ -209,12 +221,27 @@ class WrenchEstimatorNode(Node):
         self._process(ns, msg, ft)
 
     # ------------------------------------------------------------------ processing
-    def _process(self, ns: int, msg: JointState, ft: dict[str, np.ndarray]) -> None:
+    def _process(self, ns: int, js_data: bytes, ft_data: dict[str, bytes]) -> None:
+        """Deserialise and process one synchronised sample (one in ``sample_every``)."""
         if ns <= self._last_ns:
             return
         self._seen += 1
         if (self._seen - 1) % self.config.sample_every:
             self._last_ns = ns
+            return
+        try:
+            msg = deserialize_message(js_data, JointState)
+            ft = {}
+            for h in HANDS:
+                w = wrench_to_array(deserialize_message(ft_data[h], WrenchStamped).wrench)
+                if not np.all(np.isfinite(w)):
+                    raise InvalidInput(f"/ft/{_FT_TOPIC[h]}: NaN or infinite wrench")
+                ft[h] = w
+        except IcubPmpError as exc:
+            self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
+            return
+        except Exception as exc:  # a corrupt serialised message
+            self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: cannot deserialise: {exc}")
             return
         try:
             if msg.name != self._cached_names:
