@@ -1,4 +1,5 @@
-"""Time series from a recorded bag (rosbags AnyReader): joint states, wrenches, trajectories.
+"""Time series from a recorded bag (icub_pmp.bags reader + rosbags CDR decoding): joint
+states, wrenches, trajectories.
 
 No ROS import: messages are decoded by rosbags from the definitions stored in the bag.
 """
@@ -60,55 +61,54 @@ def read_bag_series(path: str | Path, joint_stride: int = 10) -> BagSeries:
 
     Times are message header stamps (sim time). Raises :class:`BagError` on an unreadable bag.
     """
-    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
 
+    from icub_pmp.bags import BagReader
+
+    store = get_typestore(Stores.ROS2_JAZZY)  # the standard types this report decodes
     out = BagSeries()
     js_t, js_p, js_v, js_e = [], [], [], []
     names: list[str] | None = None
     w: dict[str, tuple[list[float], list[np.ndarray], str]] = {}
     try:
-        with AnyReader([Path(path)]) as reader:
-            conns = reader.connections
-            for c in conns:
-                out.counts[c.topic] = out.counts.get(c.topic, 0) + c.msgcount
-            wanted = [
-                c
-                for c in conns
-                if c.topic == "/joint_states"
-                or c.msgtype in (WRENCH, TRAJECTORY)
-            ]
-            k = 0
-            for conn, t_ns, raw in reader.messages(connections=wanted):
-                msg = reader.deserialize(raw, conn.msgtype)
-                if conn.topic == "/joint_states":
-                    k += 1
-                    if k % joint_stride:
-                        continue
-                    if names is None:
-                        names = list(msg.name)
-                    if list(msg.name) != names or len(msg.position) != len(names):
-                        continue
-                    js_t.append(_stamp(msg.header))
-                    js_p.append(np.asarray(msg.position, dtype=float))
-                    n = len(names)
-                    js_v.append(np.asarray(msg.velocity, dtype=float) if len(msg.velocity) == n
-                                else np.zeros(n))
-                    js_e.append(np.asarray(msg.effort, dtype=float) if len(msg.effort) == n
-                                else np.zeros(n))
-                elif conn.msgtype == WRENCH:
-                    f, tq = msg.wrench.force, msg.wrench.torque
-                    entry = w.setdefault(conn.topic, ([], [], msg.header.frame_id))
-                    entry[0].append(_stamp(msg.header))
-                    entry[1].append(np.array([f.x, f.y, f.z, tq.x, tq.y, tq.z]))
-                else:
-                    pts = msg.points
-                    if not pts:
-                        continue
-                    times = np.array([p.time_from_start.sec + p.time_from_start.nanosec * 1e-9
-                                      for p in pts])
-                    pos = np.array([np.asarray(p.positions, dtype=float) for p in pts])
-                    out.trajectories.append((t_ns * 1e-9, list(msg.joint_names), times, pos))
-    except Exception as exc:  # rosbags raises several unrelated types
+        reader = BagReader(path)
+        info = reader.info()
+        out.counts = {t.name: t.count for t in info.topics}
+        wanted = [t.name for t in info.topics
+                  if t.name == "/joint_states" or t.msgtype in (WRENCH, TRAJECTORY)]
+        k = 0
+        for bm in reader.messages(wanted):
+            if bm.topic == "/joint_states":
+                k += 1
+                if k % joint_stride:
+                    continue
+            msg = store.deserialize_cdr(bm.data, bm.msgtype)
+            if bm.topic == "/joint_states":
+                if names is None:
+                    names = list(msg.name)
+                if list(msg.name) != names or len(msg.position) != len(names):
+                    continue
+                n = len(names)
+                js_t.append(_stamp(msg.header))
+                js_p.append(np.asarray(msg.position, dtype=float))
+                js_v.append(np.asarray(msg.velocity, dtype=float) if len(msg.velocity) == n
+                            else np.zeros(n))
+                js_e.append(np.asarray(msg.effort, dtype=float) if len(msg.effort) == n
+                            else np.zeros(n))
+            elif bm.msgtype == WRENCH:
+                f, tq = msg.wrench.force, msg.wrench.torque
+                entry = w.setdefault(bm.topic, ([], [], msg.header.frame_id))
+                entry[0].append(_stamp(msg.header))
+                entry[1].append(np.array([f.x, f.y, f.z, tq.x, tq.y, tq.z]))
+            elif msg.points:
+                pts = msg.points
+                times = np.array([p.time_from_start.sec + p.time_from_start.nanosec * 1e-9
+                                  for p in pts])
+                pos = np.array([np.asarray(p.positions, dtype=float) for p in pts])
+                stamp = _stamp(msg.header)
+                out.trajectories.append((stamp if stamp > 0 else bm.log_time * 1e-9,
+                                         list(msg.joint_names), times, pos))
+    except Exception as exc:  # BagError and the decoder's own error types
         raise BagError(f"cannot read bag {path}: {exc}") from exc
     if names is not None and js_t:
         out.joints = JointSeries(

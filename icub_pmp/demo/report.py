@@ -94,6 +94,8 @@ def write_report(out_dir: Path, bag_dir: Path, results: list[Any],
             if r.sim_end > r.sim_start:
                 ax[0].axvspan(r.sim_start, r.sim_end, alpha=0.08)
                 ax[0].text(r.sim_start, 0, r.name, fontsize=7, rotation=90, va="bottom")
+                if r.name.startswith("cartesian"):
+                    continue  # minimum-jerk controller, no time-base generator
                 tau = max(r.sim_end - r.sim_start - 1.0, 0.1)
                 tt = np.linspace(0, tau, 200)
                 ax[1].plot(r.sim_start + tt, min_jerk_gamma(tt, tau), label=r.name)

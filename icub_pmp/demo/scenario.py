@@ -429,12 +429,12 @@ def replay_check(bag_dir: Path, env: dict[str, str]) -> dict[str, object]:
 
 
 def _count_in_bag(bag_dir: Path, topic: str) -> int:
-    from rosbags.highlevel import AnyReader
+    from icub_pmp.bags import BagReader
+    from icub_pmp.errors import BagError
 
     try:
-        with AnyReader([bag_dir]) as reader:
-            return sum(c.msgcount for c in reader.connections if c.topic == topic)
-    except Exception:  # unreadable bag: the replay check fails on its own
+        return sum(t.count for t in BagReader(bag_dir).info().topics if t.name == topic)
+    except BagError:  # unreadable bag: the replay check fails on its own
         return 0
 
 
