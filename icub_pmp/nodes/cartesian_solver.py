@@ -23,9 +23,7 @@ import math
 from typing import Any
 
 import numpy as np
-import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.time import Time
@@ -43,7 +41,7 @@ from icub_pmp.cartesian import (
     MinJerkGenerator,
     SampledTrajectory,
 )
-from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_model import IcubModel
 from icub_pmp.kinematics.robot_spec import RobotSpec
 from icub_pmp.nodes.conversions import (
@@ -55,6 +53,7 @@ from icub_pmp.nodes.conversions import (
     quat_wxyz_to_matrix,
     validate_joint_state,
 )
+from icub_pmp.nodes.node_runner import run_node
 
 __all__ = ["CartesianSolverNode", "main"]
 
@@ -251,20 +250,7 @@ class CartesianSolverNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp cartesian_solver``)."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = CartesianSolverNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ConfigError as exc:
-        raise SystemExit(f"cartesian_solver: {exc}") from exc
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    run_node(CartesianSolverNode, args, "cartesian_solver")
 
 if __name__ == "__main__":
     main()

@@ -21,10 +21,8 @@ from __future__ import annotations
 import dataclasses
 import re
 
-import rclpy
 from geometry_msgs.msg import PointStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
@@ -40,6 +38,7 @@ from icub_pmp.nodes.conversions import (
     time_to_sec,
     validate_joint_state,
 )
+from icub_pmp.nodes.node_runner import run_node
 from icub_pmp.vision import (
     MotionBlobs,
     MotionSegmenter,
@@ -259,18 +258,7 @@ class MotionSegmenterNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp motion_segmenter``)."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = MotionSegmenterNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    run_node(MotionSegmenterNode, args, "motion_segmenter")
 
 if __name__ == "__main__":
     main()

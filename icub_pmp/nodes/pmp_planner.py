@@ -24,10 +24,8 @@ from __future__ import annotations
 import math
 import time
 
-import rclpy
 from nav_msgs.msg import Path
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.service_introspection import ServiceIntrospectionState
@@ -45,6 +43,7 @@ from icub_pmp.nodes.conversions import (
     quat_wxyz_to_matrix,
     validate_joint_state,
 )
+from icub_pmp.nodes.node_runner import run_node
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
 
 __all__ = ["PmpPlannerNode", "main"]
@@ -238,18 +237,7 @@ class PmpPlannerNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp pmp_planner``)."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = PmpPlannerNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    run_node(PmpPlannerNode, args, "pmp_planner")
 
 if __name__ == "__main__":
     main()

@@ -8,14 +8,13 @@ time (``posture`` parameter, validated).
 
 from __future__ import annotations
 
-import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from icub_pmp.kinematics.robot_spec import RobotSpec
 from icub_pmp.nodes.conversions import make_joint_state
+from icub_pmp.nodes.node_runner import run_node
 
 __all__ = ["PosturePublisher", "main"]
 
@@ -73,18 +72,7 @@ class PosturePublisher(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp posture_publisher``)."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = PosturePublisher()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    run_node(PosturePublisher, args, "posture_publisher")
 
 if __name__ == "__main__":
     main()
