@@ -179,8 +179,10 @@ def test_record_and_replay_reproduce_the_stream(graph, client, tmp_path, ros_dom
     bag = tmp_path / "bag"
     rec = NodeProcess(command=[str(repo_root() / "scripts/record.sh"), "-o", str(bag),
                                "/joint_states", "/ft/r_arm_ft"])
-    assert rec.wait_for_output("recording", 60) or rec.alive(), rec.output()
-    assert client.wait_sim(0.5)
+    # the recorder prints one line per topic once it has subscribed to it
+    assert rec.wait_for_output("recording /joint_states", 60), rec.output()
+    assert rec.wait_for_output("recording /ft/r_arm_ft", 60), rec.output()
+    assert client.wait_sim(1.0)
     rec.stop(timeout=30)
     assert (bag / "metadata.yaml").exists(), rec.output()
     info = subprocess.run([str(repo_root() / "scripts/env.sh"), "icub", "bag", "info", str(bag)],
