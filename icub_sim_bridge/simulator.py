@@ -43,6 +43,7 @@ import mujoco
 import numpy as np
 
 from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics.name_index import name_indices
 from icub_pmp.kinematics.robot_spec import RobotSpec
 from icub_sim_bridge.model_builder import OBJECT_NAMES, BuiltModel, ModelBuilder
 from icub_sim_bridge.sim_config import SimConfig
@@ -191,13 +192,7 @@ class Simulator:
 
     def indices(self, names: Iterable[str]) -> np.ndarray:
         """Positions in ``joint_names`` of ``names`` (raises :class:`UnknownName`)."""
-        out = []
-        for n in names:
-            i = self._index.get(n)
-            if i is None:
-                raise UnknownName("joint", n, self.joint_names)
-            out.append(i)
-        return np.array(out, dtype=int)
+        return name_indices(names, self._index, self.joint_names)
 
     @property
     def time(self) -> float:

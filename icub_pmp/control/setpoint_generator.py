@@ -16,7 +16,8 @@ from typing import NamedTuple, Sequence
 import numpy as np
 
 from icub_pmp.control.joint_trajectory import JointTrajectory
-from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.errors import InvalidInput
+from icub_pmp.kinematics.name_index import name_indices
 
 __all__ = ["SetpointGenerator", "Setpoint"]
 
@@ -59,12 +60,7 @@ class SetpointGenerator:
 
     def indices(self, names: Sequence[str]) -> np.ndarray:
         """Positions of ``names`` in the joint vector (raises UnknownName)."""
-        out = []
-        for n in names:
-            if n not in self._index:
-                raise UnknownName("joint", n, self.joint_names)
-            out.append(self._index[n])
-        return np.array(out, dtype=int)
+        return name_indices(names, self._index, self.joint_names)
 
     # ------------------------------------------------------------------ sources
     def hold(self, q: np.ndarray | None = None, t: float | None = None) -> None:

@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from icub_pmp.errors import InvalidInput, ModelError, UnknownName
+from icub_pmp.kinematics.name_index import name_indices
 from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec, urdf_path
 
 __all__ = ["FtDynamicsModel", "SensorWrenches", "FT_JOINTS"]
@@ -114,12 +115,8 @@ class FtDynamicsModel:
 
     def indices(self, names: Sequence[str]) -> np.ndarray:
         """Positions of URDF joints ``names`` in the (nq,) vectors (raises UnknownName)."""
-        out = []
-        for n in names:
-            if n not in self.joint_names:
-                raise UnknownName("joint", n, self.joint_names)
-            out.append(self.joint_names.index(n))
-        return np.array(out, dtype=int)
+        index = {n: i for i, n in enumerate(self.joint_names)}
+        return name_indices(names, index, self.joint_names)
 
     def _load(self, q: np.ndarray, v: np.ndarray | None, a: np.ndarray | None) -> None:
         self._q[self._act] = q

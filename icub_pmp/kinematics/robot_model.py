@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from icub_pmp.errors import InvalidInput, ModelError, UnknownName
+from icub_pmp.kinematics.name_index import name_indices
 from icub_pmp.kinematics.robot_spec import RobotSpec, urdf_path
 
 __all__ = ["IcubModel"]
@@ -54,12 +55,7 @@ class IcubModel:
     # ------------------------------------------------------------------ names and indices
     def indices(self, names: Iterable[str]) -> np.ndarray:
         """Positions in ``q`` of the URDF joints ``names`` (raises :class:`UnknownName`)."""
-        out = []
-        for n in names:
-            if n not in self._index:
-                raise UnknownName("joint", n, self.joint_names)
-            out.append(self._index[n])
-        return np.array(out, dtype=int)
+        return name_indices(names, self._index, self.joint_names)
 
     def frame_id(self, frame: str) -> int:
         """pinocchio id of ``frame`` (raises :class:`UnknownName` listing the frames)."""
