@@ -17,10 +17,8 @@ from __future__ import annotations
 
 import time
 
-import rclpy
 from geometry_msgs.msg import TransformStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
@@ -32,6 +30,7 @@ from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.link_transforms import LinkTransform, LinkTransforms
 from icub_pmp.kinematics.robot_state_publisher_config import RobotStatePublisherConfig
 from icub_pmp.nodes.conversions import joint_state_field, validate_joint_state
+from icub_pmp.nodes.node_runner import spin_node
 
 __all__ = ["RobotStatePublisher", "main", "LATCHED_QOS", "TF_QOS"]
 
@@ -126,24 +125,7 @@ class RobotStatePublisher(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp robot_state_publisher``)."""
-    from rclpy.experimental import EventsExecutor
-
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = RobotStatePublisher()
-        executor = EventsExecutor()
-        executor.add_node(node)
-        # EventsExecutor.spin() of the Jazzy wheel does not return on SIGINT; spin_once does.
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    spin_node(RobotStatePublisher, args)
 
 if __name__ == "__main__":
     main()
