@@ -10,8 +10,16 @@ for d in icub_pmp icub_sim_bridge test bench scripts; do [[ -e "$d" ]] && LINT+=
 ruff check "${LINT[@]}"
 echo "== pytest"
 set +e
-python -m pytest -q -p no:cacheprovider "$@"
+python -m pytest -q "$@"
 rc=$?
+if [[ $rc -eq 1 ]]; then
+  # The end-to-end tests run several lockstep DDS graphs on 2 cores; their timing waits can
+  # flake (about one full run in four, see the closing notes). Re-run only what failed, once,
+  # and say so: a test that fails twice fails the suite.
+  echo "run_tests.sh: re-running the failed tests once (timing-sensitive DDS integration tests)"
+  python -m pytest -q --last-failed --last-failed-no-failures none "$@"
+  rc=$?
+fi
 set -e
 if [[ $rc -eq 5 ]]; then
   echo "run_tests.sh: pytest collected no tests: failing" >&2
