@@ -191,8 +191,8 @@ def test_replay_with_clock_drives_use_sim_time_nodes(recorded, ros_probe):
             time.sleep(0.01)
         assert play.proc.returncode == 0, play.output()
     finally:
-        ros_probe.node.destroy_subscription(sub)
-        ros_probe.node.destroy_subscription(js)
+        ros_probe.destroy(sub)
+        ros_probe.destroy(js)
         ros_probe.executor.remove_node(node)
         node.destroy_node()
     assert "not replayed" in play.output()

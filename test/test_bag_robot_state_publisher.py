@@ -104,7 +104,7 @@ def test_node_publishes_description_static_and_tf(ros_probe, links):
     finally:
         stop.set()
         feeder.join(2)
-        ros_probe.node.destroy_publisher(pub)
+        ros_probe.destroy(pub)
         node.stop()
     assert desc and "<robot" in desc[0].data and "file://" in desc[0].data
     assert static and len(static[0].transforms) == len(links.static())

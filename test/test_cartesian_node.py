@@ -69,7 +69,7 @@ def test_solve_pose_over_dds(graph, ros_probe):
     assert list(resp.solution.name)[:3] == ["torso_pitch", "torso_roll", "torso_yaw"]
     ros_probe.wait_for(lambda: False, 0.5)
     assert got == []
-    ros_probe.node.destroy_subscription(sub)
+    ros_probe.destroy(sub)
 
 
 def test_bad_requests_answer_false(graph, ros_probe):
@@ -131,7 +131,7 @@ def test_go_to_pose_publishes_a_min_jerk_trajectory(graph, ros_probe):
                         _request(GoToPose, xyz=(-0.28, 0.20, 0.10)))
     assert r2.success, r2.message
     assert "continued from the running one" in r2.message
-    ros_probe.node.destroy_subscription(sub)
+    ros_probe.destroy(sub)
 
 
 def test_parameters_validated_at_run_time(graph, ros_probe):

@@ -43,6 +43,10 @@ class _Recorder:
         self.subs = [probe.node.create_subscription(
             cls, topic, lambda m, t=topic: self._cb(t, m), qos_profile_sensor_data)
             for topic, cls in topics.items()]
+        # a new subscription is matched by the publishers after a discovery round that takes
+        # a while on a loaded machine: record only once every topic delivers
+        assert probe.wait_for(lambda: all(self.data[t] for t in topics), 30.0), \
+            {t: len(self.data[t]) for t in topics}
 
     def _cb(self, topic: str, msg) -> None:
         ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
@@ -56,7 +60,7 @@ class _Recorder:
     def close(self) -> None:
         """Unsubscribe (a 1 kHz subscription left behind would load the probe's thread)."""
         for sub in self.subs:
-            self.probe.node.destroy_subscription(sub)
+            self.probe.destroy(sub)
         self.subs = []
 
 
@@ -155,7 +159,7 @@ def test_trajectory_is_followed_and_bad_ones_are_rejected(graph, probe):
     out = graph.procs["impedance_controller"].output()
     assert out.count("/joint_trajectory rejected") >= 3, out[-3000:]
     assert "NaN" in out and "r_knee" in out and "strictly increasing" in out
-    probe.node.destroy_publisher(pub)
+    probe.destroy(pub)
 
 
 def test_external_wrench_and_contact_over_dds(graph, probe):
@@ -186,10 +190,11 @@ def test_external_wrench_and_contact_over_dds(graph, probe):
     assert pushed
     settled = [ns for ns in sorted(set(gt) & set(est)) if ns >= pushed[0] + 800_000_000]
     assert len(settled) >= 5, (len(gt), len(est))
-    for ns in settled:
-        f_gt, f_est = force(gt[ns]), force(est[ns])
-        assert np.linalg.norm(f_est - f_gt) <= max(0.05 * np.linalg.norm(f_gt), 0.1)
-    probe.node.destroy_subscription(sub)
+    errs = [(ns, np.linalg.norm(force(est[ns]) - force(gt[ns])), np.linalg.norm(force(gt[ns])))
+            for ns in settled]
+    bad = [(ns, e, g) for ns, e, g in errs if e > max(0.05 * g, 0.1)]
+    assert not bad, (bad, [round(e, 3) for _, e, _ in errs], graph.outputs()[-4000:])
+    probe.destroy(sub)
     assert contact and contact[-1]
 
 
@@ -232,7 +237,7 @@ def test_runtime_parameters_and_velocity_command(graph, probe):
         t, q = q_yaw()
     rate = (q - q0) / (t - t0)
     assert 0.1 < rate < 0.3, (rate, t - t0)
-    probe.node.destroy_publisher(pub)
+    probe.destroy(pub)
 
 
 def test_hold_service_and_estimate_watchdog(graph, probe):
@@ -278,12 +283,19 @@ def _watchdog(did: int) -> None:
         got: list[JointState] = []
         sub = probe.node.create_subscription(JointState, "/effort_command", got.append,
                                              qos_profile_sensor_data)
+        # discovery of the new subscription by the controller's publisher takes a while on a
+        # loaded machine: feed joint states until the first answer arrives, then count
+        assert probe.wait_for(lambda: send(5) or len(got) > 0, 30.0), proc.output()[-2000:]
+        got.clear()
+        trips, backs = (proc.output().count(t) for t in ("safe hold", "joint states are back"))
         send(40)
-        assert proc.wait_for_output("safe hold", 20.0), proc.output()[-2000:]
-        probe.node.destroy_subscription(sub)
+        assert probe.wait_for(lambda: proc.output().count("safe hold") > trips, 20.0), \
+            proc.output()[-2000:]
+        probe.destroy(sub)
         assert len(got) > 20 and len(got[-1].effort) == len(spec.actuated_joints)
         send(20)
-        assert proc.wait_for_output("joint states are back", 20.0), proc.output()[-2000:]
+        assert probe.wait_for(lambda: proc.output().count("joint states are back") > backs,
+                              20.0), proc.output()[-2000:]
     finally:
         probe.close()
         proc.stop()

@@ -127,7 +127,7 @@ def test_reach_service_over_dds(node, ros_probe, model):
     first = dict(zip(resp.trajectory.joint_names, resp.trajectory.points[0].positions))
     assert first["r_elbow"] == pytest.approx(0.5)
     assert first["r_shoulder_pitch"] == pytest.approx(-0.6)  # from /joint_states
-    ros_probe.node.destroy_publisher(pub)
+    ros_probe.destroy(pub)
 
 
 def test_bad_goals_answer_false_and_node_survives(node, ros_probe):

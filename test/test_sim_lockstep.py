@@ -70,8 +70,7 @@ def test_lockstep_waits_for_the_answer(ros_domain_id, ros_probe):
                 if attempt == 2:
                     raise
         assert r.success, r.message
-        node.destroy_subscription(sub)
-        node.destroy_publisher(pub)
+        ros_probe.destroy(sub, pub)
     finally:
         rc = proc.stop()
         assert rc == 0, proc.output()[-3000:]

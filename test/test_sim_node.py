@@ -138,7 +138,7 @@ def test_bad_commands_rejected_node_keeps_running(bridge, ros_probe):
     assert bridge.alive()
     resp = _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="rest"))
     assert resp.success, resp.message
-    ros_probe.node.destroy_publisher(pub)
+    ros_probe.destroy(pub)
 
 
 def test_services(bridge, ros_probe):

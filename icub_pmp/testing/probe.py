@@ -2,15 +2,22 @@
 
 from __future__ import annotations
 
+import queue
 import threading
 import time
 from typing import Any, Callable
 
 import rclpy
+from rclpy.client import Client
 from rclpy.context import Context
+from rclpy.exceptions import InvalidHandle
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile, qos_profile_sensor_data
+from rclpy.service import Service
+from rclpy.subscription import Subscription
+from rclpy.timer import Timer
 
 __all__ = ["RosProbe"]
 
@@ -20,6 +27,14 @@ class RosProbe:
 
     ``RosProbe(domain_id)`` joins that domain only (own rclpy context). Use
     :meth:`wait_for_topic`, :meth:`wait_for_service`, :meth:`collect`, :meth:`call`.
+
+    Destroy the entities you create on :attr:`node` with :meth:`destroy`, not with
+    ``node.destroy_*``: destroying a subscription, client or publisher from another thread while
+    the executor waits on it makes rclpy raise ``InvalidHandle`` ("cannot use Destroyable because
+    destruction was requested") inside the spin thread (ros2/rclpy#1142, #1206). That used to kill
+    the probe's spin thread, after which every wait timed out. :meth:`destroy` runs the
+    destruction on the spin thread, between two ``spin_once`` calls; the spin loop also survives
+    that exception (counted in :attr:`spin_errors`) for code that destroys directly.
     """
 
     def __init__(self, domain_id: int, name: str = "test_probe"):
@@ -28,18 +43,58 @@ class RosProbe:
         self.node = Node(name, context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        self.spin_errors = 0
+        self._pending: queue.SimpleQueue[tuple[Callable[[], Any], threading.Event]] = \
+            queue.SimpleQueue()
         self._stop = False
         self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
 
     def _spin(self) -> None:
         while not self._stop and self.context.ok():
+            self._run_pending()
             try:
-                self.executor.spin_once(timeout_sec=0.05)
+                self.executor.spin_once(timeout_sec=0.02)
+            except InvalidHandle:  # an entity destroyed from another thread (class doc)
+                self.spin_errors += 1
             except Exception:  # shutting down
                 if self._stop:
                     return
                 raise
+        self._run_pending()
+
+    def _run_pending(self) -> None:
+        while True:
+            try:
+                fn, done = self._pending.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                fn()
+            finally:
+                done.set()
+
+    def destroy(self, *entities: Subscription | Publisher | Client | Service | Timer) -> None:
+        """Destroy entities of :attr:`node` on the spin thread (see the class doc); returns
+        when they are destroyed."""
+        destroyers = {Subscription: self.node.destroy_subscription,
+                      Publisher: self.node.destroy_publisher, Client: self.node.destroy_client,
+                      Service: self.node.destroy_service, Timer: self.node.destroy_timer}
+        for entity in entities:
+            fn = next((f for cls, f in destroyers.items() if isinstance(entity, cls)), None)
+            if fn is None:
+                raise TypeError(f"RosProbe.destroy: cannot destroy {type(entity).__name__}")
+            self._on_spin_thread(lambda fn=fn, e=entity: fn(e))
+
+    def _on_spin_thread(self, fn: Callable[[], Any]) -> None:
+        if not self._thread.is_alive() or threading.current_thread() is self._thread:
+            fn()
+            return
+        done = threading.Event()
+        self._pending.put((fn, done))
+        self.executor.wake()  # end the current wait now
+        if not done.wait(10.0):
+            raise TimeoutError("RosProbe: the spin thread did not run a destruction in 10 s")
 
     # ---------------------------------------------------------------- graph waits
     def wait_for(self, predicate: Callable[[], bool], timeout: float) -> bool:
@@ -61,7 +116,7 @@ class RosProbe:
         try:
             return client.wait_for_service(timeout_sec=timeout)
         finally:
-            self.node.destroy_client(client)
+            self.destroy(client)
 
     def node_names(self) -> list[str]:
         """Fully qualified names of the nodes visible in the domain."""
@@ -89,7 +144,7 @@ class RosProbe:
         try:
             self.wait_for(lambda: len(got) >= count, timeout)
         finally:
-            self.node.destroy_subscription(sub)
+            self.destroy(sub)
         with lock:
             return list(got)
 
@@ -104,7 +159,7 @@ class RosProbe:
                 raise TimeoutError(f"service {service} gave no answer within {timeout} s")
             return future.result()
         finally:
-            self.node.destroy_client(client)
+            self.destroy(client)
 
     def close(self) -> None:
         """Stop spinning and shut the context down."""
