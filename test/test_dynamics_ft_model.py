@@ -90,3 +90,27 @@ def test_bad_inputs_are_rejected(ft_model):
         ft_model.rnea(np.zeros(ft_model.nq), hand_wrenches={"middle": np.zeros(6)})
     with pytest.raises(InvalidInput, match="gravity"):
         ft_model.set_gravity([0, 0, float("nan")])
+
+
+def test_estimator_two_passes_equal_the_general_rnea(ft_model, icub):
+    """The estimator's two passes (free_sensor_wrenches, then torques_with_sensor_excess) give
+    the same sensor wrenches, hand wrenches and joint torques as the general rnea() with the
+    hand wrenches applied: the external wrench on the distal arm given at the sensor is moved
+    to the hand (eq 2) and folded into RNEA (eq 3)."""
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        q, v, a = icub.random_q(rng), rng.normal(size=ft_model.nq), rng.normal(size=ft_model.nq)
+        excess = {h: rng.normal(size=6) for h in ("left", "right")}
+        free = ft_model.free_sensor_wrenches(q, v, a)
+        tau, ext_hand, ext_root = ft_model.torques_with_sensor_excess(excess)
+        r0 = ft_model.rnea(q, v, a)
+        r1 = ft_model.rnea(q, v, a, hand_wrenches=ext_hand)
+        for h in ("left", "right"):
+            np.testing.assert_allclose(free[h], r0.sensor[h], atol=1e-12)
+            # the hand wrench makes the sensor carry exactly the excess less
+            np.testing.assert_allclose(r1.sensor[h], r0.sensor[h] - excess[h], atol=1e-9)
+            _, t_rh = ft_model.hand_placements(h)
+            np.testing.assert_allclose(
+                ext_root[h], np.concatenate([t_rh.rotation @ ext_hand[h][:3],
+                                             t_rh.rotation @ ext_hand[h][3:]]), atol=1e-12)
+        np.testing.assert_allclose(tau, r1.tau, atol=1e-9)

@@ -1,5 +1,9 @@
 """ButterworthLowPass: a second-order Butterworth low-pass filter over a vector, one sample at a
-time (direct form II transposed, coefficients from ``scipy.signal.butter``)."""
+time (direct form II transposed, coefficients from ``scipy.signal.butter``).
+
+The transposed form ``y = b0 x + z0; z0' = b1 x - a1 y + z1; z1' = b2 x - a2 y`` is evaluated
+with ``y`` substituted, as one (2 x 3) matrix product on the stacked ``[x; z0; z1]``: the same
+arithmetic in three numpy calls instead of ten (this filter runs at 1 kHz in the estimator)."""
 
 from __future__ import annotations
 
@@ -38,12 +42,17 @@ class ButterworthLowPass:
             self._b = b / a[0]
             self._a = a / a[0]
             self._zi_unit = signal.lfilter_zi(self._b, self._a)
-        self._z: np.ndarray | None = None  # (2, n) filter state
+            b0, b1, b2 = self._b
+            _, a1, a2 = self._a
+            self._b0 = float(b0)
+            #: [z0'; z1'] = step @ [x; z0; z1]
+            self._step = np.array([[b1 - a1 * b0, -a1, 1.0], [b2 - a2 * b0, -a2, 0.0]])
+        self._xz: np.ndarray | None = None  # (3, n): last input, filter state z0, z1
         self._y = np.zeros(n)
 
     def reset(self) -> None:
         """Forget the state; the next sample re-initialises it."""
-        self._z = None
+        self._xz = None
 
     @property
     def value(self) -> np.ndarray:
@@ -61,11 +70,12 @@ class ButterworthLowPass:
         if not self.enabled:
             self._y = x.copy()
             return self._y.copy()
-        if self._z is None:
-            self._z = np.outer(self._zi_unit, x)
-        b, a, z = self._b, self._a, self._z
-        y = b[0] * x + z[0]
-        z[0] = b[1] * x - a[1] * y + z[1]
-        z[1] = b[2] * x - a[2] * y
+        xz = self._xz
+        if xz is None:
+            xz = self._xz = np.empty((3, self.n))
+            xz[1:] = np.outer(self._zi_unit, x)
+        xz[0] = x
+        y = self._b0 * x + xz[1]
+        xz[1:] = self._step @ xz
         self._y = y
         return y

@@ -41,7 +41,8 @@ class ContactDetector:
 
     def update(self, force: np.ndarray) -> bool:
         """Feed the force (3,) [N] of one sample; returns the contact flag."""
-        f = math.sqrt(float(np.dot(force, force)))
+        force = np.asarray(force, dtype=float)
+        f = math.sqrt(force @ force)
         switching = f < self.force_off if self.in_contact else f > self.force_on
         self._count = self._count + 1 if switching else 0
         if self._count >= self.min_samples:

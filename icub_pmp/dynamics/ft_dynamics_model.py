@@ -95,6 +95,16 @@ class FtDynamicsModel:
         self._hand_joint = {
             h: self.model.frames[f].parentJoint for h, f in self._hand_frame.items()
         }
+        # per hand: FT joint, hand's parent joint, joint frame -> hand frame, hand origin in
+        # the joint frame (the constants of torques_with_sensor_excess)
+        self._hand_chain = [
+            (h, self._ft_joint[h], self._hand_joint[h], self._hand_in_joint[h].inverse(),
+             self._hand_in_joint[h].translation.copy())
+            for h in HANDS
+        ]
+        self._fext_hands = pin.StdVec_Force()
+        for _ in range(self.model.njoints):
+            self._fext_hands.append(pin.Force.Zero())
         self.lower = np.array(self.model.lowerPositionLimit[self._act])
         self.upper = np.array(self.model.upperPositionLimit[self._act])
 
@@ -162,6 +172,49 @@ class FtDynamicsModel:
             tau = pin.rnea(self.model, self.data, self._q, self._v, self._a)
         return tau[self._act]
 
+    def free_sensor_wrenches(
+        self, q: np.ndarray, v: np.ndarray, a: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """The estimator's first pass: RNEA (eqs 8-10) with no external wrench for the state
+        ``q, v, a`` (nq,) (validated by the caller), and the forward kinematics of ``q``.
+        Returns {hand: (6,)} the wrench through each FT sensor (parent on child, sensor frame)
+        and keeps the state loaded for :meth:`torques_with_sensor_excess`."""
+        act = self._act
+        self._q[act] = q
+        self._v[act] = v
+        self._a[act] = a
+        pin.rnea(self.model, self.data, self._q, self._v, self._a)
+        f = self.data.f
+        out = {}
+        for h, j in self._ft_ids:
+            out[h] = f[j].vector.copy()
+        pin.forwardKinematics(self.model, self.data, self._q)
+        return out
+
+    def torques_with_sensor_excess(
+        self, excess: Mapping[str, np.ndarray]
+    ) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """The estimator's second pass (eqs 2-3) for the state of the last
+        :meth:`free_sensor_wrenches`: ``excess`` {hand: (6,)} = predicted internal minus
+        measured sensor wrench (sensor frame, about its origin) = the external wrench on the
+        distal arm. Returns the joint torques (nq,) with those external wrenches applied at the
+        hands (RNEA), and the wrenches {hand: (6,)} about the hand origin in hand-frame axes
+        and in root_link axes. Every hand in :data:`HANDS` must be given."""
+        o_mi = self.data.oMi
+        fext = self._fext_hands  # both hand entries are overwritten on every call
+        shift = self._shift
+        ext_hand, ext_root = {}, {}
+        for h, j_ft, j_hand, joint_in_hand, hand_origin in self._hand_chain:
+            f_root = o_mi[j_ft].act(pin.Force(excess[h]))  # about the root origin
+            o_j = o_mi[j_hand]
+            f_joint = o_j.actInv(f_root)  # RNEA takes f_ext in the joint's local frame
+            fext[j_hand] = f_joint
+            ext_hand[h] = joint_in_hand.act(f_joint).vector
+            shift.translation = o_j.act(hand_origin)  # hand origin in root_link
+            ext_root[h] = shift.actInv(f_root).vector
+        tau = pin.rnea(self.model, self.data, self._q, self._v, self._a, fext)
+        return tau[self._act], ext_hand, ext_root
+
     def sensor_wrenches(self) -> dict[str, np.ndarray]:
         """{hand: (6,)} wrench through each FT sensor after the last RNEA (parent on child,
         sensor frame) [N, N m]."""
@@ -177,17 +230,6 @@ class FtDynamicsModel:
         o_h = o_mi[self._hand_joint[hand]] * self._hand_in_joint[hand]
         # the sensor frame is the FT joint's frame (at q = 0)
         return o_mi[self._ft_joint[hand]].actInv(o_h), o_h
-
-    def sensor_wrench_to_hand(self, hand: str, w_sensor: np.ndarray
-                              ) -> tuple[np.ndarray, np.ndarray]:
-        """Move a wrench (6,) given in the FT sensor frame about its origin to the hand frame
-        origin: returns it in hand-frame axes and in root_link axes (eq 2's change of
-        coordinates), for the configuration of the last :meth:`rnea` or :meth:`forward`."""
-        o_mi = self.data.oMi
-        o_h = o_mi[self._hand_joint[hand]] * self._hand_in_joint[hand]
-        f_root = o_mi[self._ft_joint[hand]].act(pin.Force(w_sensor))  # about the root origin
-        self._shift.translation = o_h.translation
-        return o_h.actInv(f_root).vector, self._shift.actInv(f_root).vector
 
     def forward(self, q: np.ndarray) -> None:
         """Forward kinematics for ``q`` (nq,) [rad] (frames updated)."""

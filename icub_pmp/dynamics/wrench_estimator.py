@@ -27,7 +27,6 @@ import math
 from typing import Mapping, NamedTuple
 
 import numpy as np
-import pinocchio as pin
 
 from icub_pmp.dynamics.butterworth_low_pass import ButterworthLowPass
 from icub_pmp.dynamics.contact_detector import ContactDetector
@@ -145,7 +144,7 @@ class WrenchEstimator:
     @property
     def offsets(self) -> dict[str, np.ndarray]:
         """Current FT offsets {hand: (6,)} in the sensor's convention (measured - model)."""
-        return {h: self._sign * o for h, o in self._offset.items()}
+        return {h: o.copy() for h, o in self._offset.items()}
 
     def rfrr_input(self, hand: str, state: FilteredState) -> np.ndarray:
         """RFRR input (30,) of ``hand``: torso + arm q, q_dot, q_ddot."""
@@ -196,59 +195,65 @@ class WrenchEstimator:
         q = self._check(q, "q")
         if v is not None:
             v = self._check(v, "v")
-        sign = self._sign
-        meas = {}
+        # x: measured FT wrenches in the sensor's convention (filtered, offsets removed below)
+        x = {}
         for h in HANDS:
             try:
-                w = np.asarray(ft[h], dtype=float)
+                w = np.array(ft[h], dtype=float)  # a copy: it is returned in the estimate
             except (KeyError, TypeError):
                 raise InvalidInput(f"ft: missing the {h} arm wrench (need {HANDS})") from None
-            if w.shape != (6,) or not math.isfinite(float(w.sum())):
+            if w.shape != (6,) or not math.isfinite(w @ w):
                 raise InvalidInput(f"ft[{h!r}]: expected 6 finite values, got {w!r}")
             f = self._ft_filter[h]
-            meas[h] = sign * (f(w) if f.enabled else w)  # -> parent_on_child
+            x[h] = f(w) if f.enabled else w
         cfg = self.config
         if cfg.gravity_source == "imu":
             if imu_acc is None:
                 raise InvalidInput("gravity_source is 'imu' but no IMU acceleration was given")
             self._gravity_from_imu(q, imu_acc)
         state = self._filter.update(t, q, v)
-        model = self.model
-        model._load(state.q, state.v, state.a)
-        model._rnea_loaded(None)
-        free = model.sensor_wrenches()
+        # eqs 8-10: the internal wrench through each sensor (model; parent on child), and the
+        # forward kinematics for eq 2
+        free = self.model.free_sensor_wrenches(state.q, state.v, state.a)
         self._samples += 1
 
-        # internal wrench: model (+ learnt residual), then offsets during calibration
-        w_int = free
+        # predicted internal wrench p in the sensor's convention: model (+ learnt residual)
+        sign = self._sign
         x_in = {}
         if self.rfrr_enabled or self.rfrr_learning:
-            w_int = {}
+            p = {}
             for h in HANDS:
                 x_in[h] = self.rfrr_input(h, state)
-                w_int[h] = free[h] + self.rfrr[h].predict(x_in[h]) if self.rfrr_enabled \
+                w_int = free[h] + self.rfrr[h].predict(x_in[h]) if self.rfrr_enabled \
                     else free[h]
+                p[h] = sign * w_int
+        else:
+            p = {}
+            for h in HANDS:
+                p[h] = sign * free[h]
+        # FT offsets (measured - predicted), averaged over the first contact-free samples
         if self._offset_n < cfg.ft_offset_samples:
             self._offset_n += 1
             for h in HANDS:
-                self._offset_acc[h] += meas[h] - w_int[h]
+                self._offset_acc[h] += x[h] - p[h]
                 self._offset[h] = self._offset_acc[h] / self._offset_n
         if self._offset_n:
-            for h in HANDS:
-                meas[h] = meas[h] - self._offset[h]
+            x = {h: x[h] - self._offset[h] for h in HANDS}
 
-        # eq 2: external wrench at the hand
-        pin.forwardKinematics(model.model, model.data, model._q)
-        ext_hand, ext_root = {}, {}
+        # eq 2: the external wrench on the distal arm at the sensor is the predicted internal
+        # wrench minus the measured one (parent on child: sign * (p - x)), moved to the hand;
+        # eq 3 (the joint torques with the estimated hand wrenches) folded into a second RNEA
+        # (loops, not comprehensions: this runs at 1 kHz and a comprehension is a call)
+        excess = {}
         for h in HANDS:
-            # w_i - w_s = the external wrench, at the sensor; moved to the hand
-            ext_hand[h], ext_root[h] = model.sensor_wrench_to_hand(h, w_int[h] - meas[h])
+            excess[h] = p[h] - x[h] if sign > 0 else x[h] - p[h]
+        tau, ext_hand, ext_root = self.model.torques_with_sensor_excess(excess)
+        contact = {}
+        for h in HANDS:
+            contact[h] = self._contact[h].update(ext_hand[h][:3])
 
-        # joint torques with the estimated hand wrenches (eq 3 folded into RNEA)
-        tau = model._rnea_loaded(ext_hand)
-        contact = {h: self._contact[h].update(ext_hand[h][:3]) for h in HANDS}
-
-        # RFRR learning on contact-free samples (never while calibrating offsets)
+        # RFRR learning on contact-free samples (never while calibrating offsets): the target
+        # is the measured minus the model wrench, parent on child
         if (
             self.rfrr_learning
             and self._offset_n >= cfg.ft_offset_samples
@@ -256,7 +261,7 @@ class WrenchEstimator:
         ):
             for h in HANDS:
                 if not contact[h] and not self._last_contact[h]:
-                    self.rfrr[h].update(x_in[h], meas[h] - free[h])
+                    self.rfrr[h].update(x_in[h], sign * x[h] - free[h])
         self._last_contact = contact
         return WrenchEstimate(
             t=float(t),
@@ -264,7 +269,7 @@ class WrenchEstimator:
             ext_hand=ext_hand,
             ext_root=ext_root,
             contact=contact,
-            ft_measured={h: sign * meas[h] for h in HANDS},
-            ft_predicted={h: sign * w_int[h] for h in HANDS},
+            ft_measured=x,
+            ft_predicted=p,
             state=state,
         )
