@@ -131,12 +131,13 @@ class IkSolver:
             x_d, R_d, w_ori, self.rest_weights(kc), self._q_rest_full[idx], np.asarray(q_fixed)
         )
         lbg, ubg = prob.g_bounds(eps)
+        lbx, ubx = prob.x_bounds
         x0 = np.clip(q_full[idx], prob.lbx, prob.ubx)
         t0 = time.perf_counter()
         try:
-            res = prob.solver(x0=x0, p=p, lbx=prob.lbx, ubx=prob.ubx, lbg=lbg, ubg=ubg)
+            res = prob.solver(x0=prob.start(x0, p), p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
             stats = prob.solver.stats()
-            q = np.array(res["x"], dtype=float).reshape(-1)
+            q = np.array(res["x"], dtype=float).reshape(-1)[: kc.n]
             status = str(stats.get("return_status", "unknown"))
             iterations = int(stats.get("iter_count", 0))
         except RuntimeError as exc:  # CasADi raises on evaluation errors (NaN in functions)
