@@ -3,6 +3,7 @@ stereo triangulation, and the benchmark's baselines and data. No ROS imports."""
 
 from icub_pmp.vision.flow_residual_detector import FlowResidualDetector
 from icub_pmp.vision.image_checks import to_gray
+from icub_pmp.vision.looming_detector import LoomingDetector
 from icub_pmp.vision.mog2_detector import Mog2Detector
 from icub_pmp.vision.motion_blobs import MotionBlob, MotionBlobs
 from icub_pmp.vision.motion_segmenter import MotionSegmenter
@@ -14,6 +15,7 @@ from icub_pmp.vision.target_tracker import TargetTracker, TrackedTarget
 
 __all__ = [
     "FlowResidualDetector",
+    "LoomingDetector",
     "Mog2Detector",
     "MotionBlob",
     "MotionBlobs",

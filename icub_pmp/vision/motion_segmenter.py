@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from icub_pmp.vision.image_checks import to_gray
+from icub_pmp.vision.looming_detector import LoomingDetector
 from icub_pmp.vision.motion_blobs import MotionBlob, MotionBlobs
 from icub_pmp.vision.motion_segmenter_config import MotionSegmenterConfig
 
@@ -71,6 +72,11 @@ class MotionSegmenter:
         )
         e = 2 * c.mask_erosion + 1
         self._erode_kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (e, e))
+        self._looming = (
+            LoomingDetector(self.nodes, self.grid_shape, s, c.accum_decay, c.accum_clip,
+                            c.accum_tol, c.loom_tol, c.blob_min_size)
+            if c.accum_decay > 0.0 else None
+        )
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -81,6 +87,8 @@ class MotionSegmenter:
         self._prev_texture: np.ndarray | None = None
         self._ttl = np.zeros(self.grid_shape, np.int32)
         self._ego_flow: np.ndarray | None = None
+        if self._looming is not None:
+            self._looming.reset()
         self._recent: list[np.ndarray] = []
         self._frame_index = -1
 
@@ -114,19 +122,31 @@ class MotionSegmenter:
             )
         failures, flow, disc, tracked = self._failures(self._prev_gray, gray)
         self._store(gray, patches)
-        kept = self._confirm(self._neighbour_filter(failures))
+        self._ego_flow = None
+        moving = reliable = np.zeros(self.grid_shape, bool)
+        evidence = failures
+        if self._looming is not None:
+            moving, reliable = self._ego_residual(flow, tracked & ~failures)
+            evidence = failures | self._looming.update(flow, self._ego_flow, reliable)
+        kept = self._confirm(self._neighbour_filter(evidence))
         self._ttl = np.where(kept, c.frames_persistence, np.maximum(self._ttl - 1, 0))
         active = self._ttl > 0
-        self._ego_flow = None
         if c.grow_by_flow and active.any():
-            moving, reliable = self._ego_residual(flow, tracked & ~failures)
+            if self._ego_flow is None:
+                moving, reliable = self._ego_residual(flow, tracked & ~failures)
             # persisted nodes now tracked like the background have left the object
             left = active & ~kept & reliable & ~moving
             self._ttl[left] = 0
             active &= ~left
             active = self._grow(active, moving)
-        labels, blobs = self._blobs(active, self._displacement(flow, tracked & ~failures), flow)
-        mask = self._mask(labels)
+        disp = self._displacement(flow, tracked & ~failures)
+        labels, blobs = self._blobs(active, disp, flow)
+        shifts = None
+        if c.mask_to_current and blobs:
+            mov = moving & reliable if self._ego_flow is not None else np.zeros_like(active)
+            shifts = [self._object_shift(labels == k, flow, mov, disp)
+                      for k in range(1, len(blobs) + 1)]
+        mask = self._mask(labels, shifts)
         return self._result(blobs, mask, failures, labels > 0, flow, disc)
 
     def _store(self, gray: np.ndarray, patches: np.ndarray) -> None:
@@ -347,7 +367,18 @@ class MotionSegmenter:
             )
         return relabel[labels], out
 
-    def _mask(self, labels: np.ndarray) -> np.ndarray:
+    @staticmethod
+    def _object_shift(blob: np.ndarray, flow: np.ndarray, moving: np.ndarray,
+                      disp: np.ndarray) -> tuple[int, int]:
+        """Image motion (du, dv) [px] of one blob's object from frame t to t+1, rounded: the
+        median LK flow of its nodes that move against the ego-motion (at least 3), else the
+        median displacement of all its nodes."""
+        m = blob & moving
+        d = flow[m] if m.sum() >= 3 else disp[blob]
+        du, dv = np.median(np.nan_to_num(d), axis=0)
+        return int(round(float(du))), int(round(float(dv)))
+
+    def _mask(self, labels: np.ndarray, shifts=None) -> np.ndarray:
         """Paint each ON node of a kept blob as a grid_step x grid_step cell (255), then
         erode by ``mask_erosion`` px (the windows' overhang)."""
         c = self.config
@@ -356,12 +387,28 @@ class MotionSegmenter:
             return mask
         s = c.grid_step
         rows, cols = self.grid_shape
-        cells = np.repeat(np.repeat((labels > 0).astype(np.uint8) * 255, s, axis=0), s, axis=1)
         x0, y0 = self.grid_origin
         u0, v0 = x0 - s // 2, y0 - s // 2
-        mask[v0 : v0 + rows * s, u0 : u0 + cols * s] = cells[
-            : c.image_height - v0, : c.image_width - u0
-        ]
+        if shifts is None:
+            cells = np.repeat(np.repeat((labels > 0).astype(np.uint8) * 255, s, axis=0), s, axis=1)
+            mask[v0 : v0 + rows * s, u0 : u0 + cols * s] = cells[
+                : c.image_height - v0, : c.image_width - u0
+            ]
+        else:
+            H, W = c.image_height, c.image_width
+            for k, (du, dv) in enumerate(shifts, start=1):
+                rr, cc = np.nonzero(labels == k)
+                r0, r1 = rr.min(), rr.max() + 1
+                c0, c1 = cc.min(), cc.max() + 1
+                sub = (labels[r0:r1, c0:c1] == k).astype(np.uint8) * 255
+                cells = np.repeat(np.repeat(sub, s, axis=0), s, axis=1)
+                a, b = v0 + r0 * s + dv, u0 + c0 * s + du
+                h, w = cells.shape
+                ya, yb = max(a, 0), min(a + h, H)
+                xa, xb = max(b, 0), min(b + w, W)
+                if ya < yb and xa < xb:
+                    np.maximum(mask[ya:yb, xa:xb], cells[ya - a : yb - a, xa - b : xb - b],
+                               out=mask[ya:yb, xa:xb])
         if c.mask_erosion > 0:
             mask = cv2.erode(mask, self._erode_kernel)
         return mask

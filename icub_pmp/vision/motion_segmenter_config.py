@@ -5,8 +5,10 @@ Defaults follow motionCUT as coded in icub-main (``ICUB_FACTS.md`` section 1c): 
 persistence, blobs of more than 10 nodes, grid over the central 0.75 x 0.75 of the image.
 Departures, each measured in ``bench/motion.py`` (BENCHMARKS.md): a 13x13 window instead of
 15x15 (same F1, 1.2x faster: the 100 frames/s goal), motionCUT's rule that only LK-found nodes
-can fail (``lk_status_is_failure`` false), and three additions: temporal confirmation,
-flow-based blob growth and ego-motion-warped centroids. ``theta_m`` is the eq. 13 threshold of
+can fail (``lk_status_is_failure`` false), and four additions: temporal confirmation,
+flow-based blob growth, ego-motion-warped centroids and masks, and a looming detector
+(accumulated ego-motion residuals whose components expand: objects approaching or receding,
+which eq. 13 between consecutive frames cannot see). ``theta_m`` is the eq. 13 threshold of
 Sect. 5 of the force-control paper (Metta et al.), expressed per window pixel.
 """
 
@@ -62,6 +64,19 @@ class MotionSegmenterConfig(ConfigBase):
         mask_erosion: erosion of the output mask [px]: a node fails as soon as its window
             (half side ``win_size // 2``) reaches the object, so failure regions overhang the
             object by about that much.
+        mask_to_current: paint each blob's mask cells shifted by its object's image motion
+            from frame t to t+1 (median LK flow of its nodes that move against the
+            ego-motion, else of all its nodes), so the mask is about the current frame as the
+            ground truth is; false: the cells at the grid positions of frame t (motionCUT).
+        accum_decay: looming detector (an addition to motionCUT,
+            :mod:`~icub_pmp.vision.looming_detector`): weight of the accumulated ego-motion
+            residual carried along a node's track to the next frame, memory about
+            ``1 / (1 - accum_decay)`` frames; 0 = off [-].
+        accum_clip: largest per-frame ego-motion residual a node adds [px/frame].
+        accum_tol: accumulated residual marking a node as a looming candidate [px].
+        loom_tol: expansion (|a| * rms radius of the fit t + a d + w perp(d)) an 8-connected
+            component of candidates (more than ``blob_min_size`` nodes) needs to count as
+            failures: an object approaching or receding, not motion parallax [px].
         target_alpha: exponential smoothing of the tracked target centroid, weight of the
             new measurement in (0, 1] [-].
         target_hold_frames: frames the target is kept after its blob disappears.
@@ -99,6 +114,11 @@ class MotionSegmenterConfig(ConfigBase):
     fill_holes: bool = True
     warp_to_current: bool = True
     mask_erosion: int = 6
+    mask_to_current: bool = True
+    accum_decay: float = 0.9
+    accum_clip: float = 1.0
+    accum_tol: float = 1.0
+    loom_tol: float = 0.5
     target_alpha: float = 0.5
     target_hold_frames: int = 10
     target_max_jump: float = 60.0
@@ -149,6 +169,11 @@ class MotionSegmenterConfig(ConfigBase):
             raise bad("flow_tol", "> 0 px/frame")
         if self.mask_erosion < 0:
             raise bad("mask_erosion", ">= 0 px")
+        if not 0.0 <= self.accum_decay < 1.0:
+            raise bad("accum_decay", "a weight in [0, 1)")
+        for f in ("accum_clip", "accum_tol", "loom_tol"):
+            if getattr(self, f) <= 0.0:
+                raise bad(f, "> 0 px")
         if not 0.0 < self.target_alpha <= 1.0:
             raise bad("target_alpha", "a weight in (0, 1]")
         if self.target_hold_frames < 0:

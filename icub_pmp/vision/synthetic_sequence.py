@@ -71,6 +71,8 @@ class SyntheticSequence:
         patch_velocity: patch velocity on the canvas (u, v) [px/s].
         patch_spin: in-plane patch rotation speed [deg/s].
         patch_start: patch centre at t = 0 relative to the canvas centre (u, v) [px].
+        patch_scale_rate: growth of the patch's scale, ``1 + patch_scale_rate * t`` [1/s]
+            (> 0: an object approaching along the optical axis, about speed / depth).
         noise: standard deviation of additive per-pixel image noise [grey levels].
         seed: texture and noise seed.
     """
@@ -88,6 +90,7 @@ class SyntheticSequence:
         patch_velocity: tuple[float, float] = (0.0, 0.0),
         patch_spin: float = 0.0,
         patch_start: tuple[float, float] = (0.0, 0.0),
+        patch_scale_rate: float = 0.0,
         noise: float = 1.0,
         seed: int = 0,
     ):
@@ -102,6 +105,7 @@ class SyntheticSequence:
         self.patch_velocity = np.asarray(patch_velocity, float)
         self.patch_spin = patch_spin
         self.patch_start = np.asarray(patch_start, float)
+        self.patch_scale_rate = patch_scale_rate
         self.noise = noise
         self._rng = np.random.default_rng(seed + 1000)
         # canvas wide enough for +-(sweep + 5) deg of rotation
@@ -146,7 +150,8 @@ class SyntheticSequence:
             canvas = canvas.copy()
             s = self.patch_size
             ang = self.patch_spin * t
-            m = cv2.getRotationMatrix2D(((s - 1) / 2, (s - 1) / 2), ang, 1.0)
+            scale = max(1.0 + self.patch_scale_rate * t, 0.05)
+            m = cv2.getRotationMatrix2D(((s - 1) / 2, (s - 1) / 2), ang, scale)
             m[:, 2] += c - (s - 1) / 2
             size = (self.canvas_w, self.canvas_h)
             warped = cv2.warpAffine(self.patch, m, size, flags=cv2.INTER_LINEAR)
