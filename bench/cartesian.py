@@ -307,8 +307,16 @@ def main(argv=None) -> int:
     dls = DlsSolver(model)
     pink_solver = PinkSolver(model)
 
-    def ipopt(solver):
-        return lambda T, ori: solver.solve(CHAIN, T.translation, T.rotation if ori else None).q
+    iterations: dict[str, list[int]] = {"pos": [], "pose": []}
+
+    def ipopt(solver, record=False):
+        def solve(T, ori):
+            sol = solver.solve(CHAIN, T.translation, T.rotation if ori else None)
+            if record:
+                iterations["pose" if ori else "pos"].append(sol.iterations)
+            return sol.q
+
+        return solve
 
     def dls_fn(T, ori):
         return dls.solve(CHAIN, T.translation, T.rotation if ori else None).q
@@ -316,7 +324,7 @@ def main(argv=None) -> int:
     def pink_fn(T, ori):
         return pink_solver.solve(T, ori)[0]
 
-    methods = {"ipopt": (ipopt(ik), n), "dls": (dls_fn, n), "pink": (pink_fn, n)}
+    methods = {"ipopt": (ipopt(ik, record=True), n), "dls": (dls_fn, n), "pink": (pink_fn, n)}
     pmp_note = None
     try:
         from icub_pmp.pmp import PmpPlanner, ReachGoal
@@ -340,7 +348,10 @@ def main(argv=None) -> int:
     # warm-up (first calls load libraries), not timed in the results
     for fn, _ in methods.values():
         fn(targets[0], False)
+    for v in iterations.values():
+        v.clear()  # drop the warm-up call
     res = {k: summarise(v) for k, v in run_methods(model, targets, methods).items()}
+    its = {k: np.array(v) for k, v in iterations.items()}
     free_targets = make_targets(model, n, args.seed + 1, constrained=False)
     free = {
         k: summarise(v)
@@ -395,6 +406,10 @@ def main(argv=None) -> int:
         "solve_ms_p95_pose": r["pose"]["ms_p95"],
         "solve_cpu_ms_median_pose": r["pose"]["cpu_ms_median"],
         "solve_cpu_ms_p95_pose": r["pose"]["cpu_ms_p95"],
+        "ipopt_iter_median": float(np.median(its["pos"])),
+        "ipopt_iter_p95": float(np.percentile(its["pos"], 95)),
+        "ipopt_iter_median_pose": float(np.median(its["pose"])),
+        "ipopt_iter_p95_pose": float(np.percentile(its["pose"], 95)),
         "pos_err_mm_p95": r["pos"]["pos_err_mm_p95"],
         "ori_err_deg_p95_pose": r["pose"]["ori_err_deg_p95"],
         "joint_limit_violations": r["pos"]["joint_limit_violations"]

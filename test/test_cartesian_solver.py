@@ -315,3 +315,42 @@ def test_additional_nonlinear_constraint(model):
         IkSolver(model, _cfg(), constraints={CHAIN: [bad]}).problem(CHAIN)
     with pytest.raises(UnknownName):
         IkSolver(model, _cfg(), constraints={"tail": [c]})
+
+
+def test_lifted_form_solves_eq11_itself(model, solver):
+    """The NLP keeps the position error as variables s (x_d - K_x(q) - s = 0, ||s||^2 <=
+    epsilon). IPOPT's answers are KKT points of eq 11 as written (||x_d - K_x(q)||^2 <=
+    epsilon): s equals the hand's error, and with IPOPT's multipliers the gradient of eq 11's
+    own Lagrangian vanishes (to IPOPT's tolerance), the bound multiplier being >= 0."""
+    import casadi as ca
+
+    from icub_pmp.cartesian.ik_problem import POSITION_SCALE
+
+    prob = solver.problem(CHAIN)
+    n, m = prob.chain.n, prob.n_linear
+    x_d = prob.p[prob.layout.x_d]
+    g_direct = ca.vertcat(POSITION_SCALE * ca.sumsqr(x_d - prob.fk_position),
+                          ca.DM(prob.linear.C) @ prob.q)
+    derivatives = ca.Function("eq11_direct", [prob.q, prob.p],
+                              [ca.gradient(prob.f, prob.q), ca.jacobian(g_direct, prob.q)])
+    eps = solver.config.epsilon
+    lbx, ubx = prob.x_bounds
+    lbg, ubg = prob.g_bounds(eps)
+    q_rest = model.posture("rest")[model.indices(prob.chain.joints)]
+    for T in _targets(model, 3, seed=21):
+        for rot in (None, T.rotation):
+            p = prob.parameters(T.translation, rot, solver.config.orientation_weight,
+                                solver.rest_weights(prob.chain), q_rest, np.zeros(0))
+            res = prob.solver(x0=prob.start(q_rest, p), p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+            assert prob.solver.stats()["success"]
+            x = np.array(res["x"]).reshape(-1)
+            q, s = x[:n], x[n:]
+            lam_g = np.array(res["lam_g"]).reshape(-1)
+            lam_x = np.array(res["lam_x"]).reshape(-1)[:n]
+            pos, _ = prob.kinematics.pose(q)
+            np.testing.assert_allclose(s, T.translation - pos, atol=1e-6)
+            assert lam_g[3] >= 0.0  # multiplier of the bound on the squared error
+            grad_f, jac_g = (np.array(v) for v in derivatives(q, p))
+            lam_direct = lam_g[3 : 4 + m]  # the same multipliers serve eq 11's direct form
+            stationarity = grad_f.reshape(-1) + jac_g.T @ lam_direct + lam_x
+            assert np.abs(stationarity).max() <= 10 * solver.config.tol, stationarity
