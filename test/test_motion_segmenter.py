@@ -190,9 +190,9 @@ def test_results_are_read_only():
 
 def test_shipped_yaml_loads():
     """config/motion_segmenter.yaml loads into MotionSegmenterConfig with motionCUT's grid,
-    pyramid, neighbour, persistence and blob-size defaults and the 13 px window."""
+    neighbour, persistence and blob-size defaults, the 13 px window and 3 pyramid levels."""
     c = MotionSegmenterConfig.from_yaml(config_dir() / "motion_segmenter.yaml", "motion_segmenter")
-    assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 13, 5)
+    assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 13, 3)
     assert (c.adj_nodes_thres, c.frames_persistence, c.blob_min_size) == (4, 3, 10)
     assert c == MotionSegmenterConfig()
 
@@ -208,6 +208,11 @@ def test_shipped_yaml_loads():
         ("cover_x_ratio", 1.5),
         ("target_alpha", 0.0),
         ("flow_tol", -1.0),
+        ("accum_decay", 1.0),
+        ("accum_clip", 0.0),
+        ("accum_tol", -1.0),
+        ("loom_tol", 0.0),
+        ("ownership_erosion", -1),
     ],
 )
 def test_config_rejects_out_of_range(field, value):

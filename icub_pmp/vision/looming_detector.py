@@ -75,13 +75,15 @@ class LoomingDetector:
     """
 
     def __init__(self, nodes: np.ndarray, grid_shape: tuple[int, int], grid_step: int,
-                 decay: float, clip: float, tol: float, loom_tol: float, min_nodes: int):
+                 decay: float, clip: float, tol: float, loom_tol: float, min_nodes: int,
+                 fill_hull: bool = True):
         self.nodes = np.asarray(nodes, np.float32)
         self.grid_shape = grid_shape
         self.origin = self.nodes[0].astype(np.float64)
         self.step = float(grid_step)
         self.decay, self.clip, self.tol = decay, clip, tol
         self.loom_tol, self.min_nodes = loom_tol, min_nodes
+        self.fill_hull = fill_hull
         self.reset()
 
     def reset(self) -> None:
@@ -127,7 +129,14 @@ class LoomingDetector:
                 continue
             idx = np.nonzero(flat == k)[0]
             if expansion(self.nodes[idx], total[idx]) >= self.loom_tol:
-                out |= labels == k
+                if self.fill_hull:
+                    rr, cc = np.divmod(idx, cols)
+                    hull = cv2.convexHull(np.stack([cc, rr], 1).astype(np.int32))
+                    filled = np.zeros(self.grid_shape, np.uint8)
+                    cv2.fillConvexPoly(filled, hull, 1)
+                    out |= filled.astype(bool)
+                else:
+                    out |= labels == k
         return out
 
     def _carry(self, total: np.ndarray, v: np.ndarray, ok: np.ndarray) -> np.ndarray:

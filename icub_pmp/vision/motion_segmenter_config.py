@@ -1,15 +1,18 @@
 """MotionSegmenterConfig: the parameters of the motionCUT-style segmenter and its node.
 
 Defaults follow motionCUT as coded in icub-main (``ICUB_FACTS.md`` section 1c): grid step 6 px,
-5 pyramid levels, LK 30 iterations / eps 0.3, at least 4 of 8 failing neighbours, 3-frame
-persistence, blobs of more than 10 nodes, grid over the central 0.75 x 0.75 of the image.
-Departures, each measured in ``bench/motion.py`` (BENCHMARKS.md): a 13x13 window instead of
-15x15 (same F1, 1.2x faster: the 100 frames/s goal), motionCUT's rule that only LK-found nodes
-can fail (``lk_status_is_failure`` false), and four additions: temporal confirmation,
-flow-based blob growth, ego-motion-warped centroids and masks, and a looming detector
-(accumulated ego-motion residuals whose components expand: objects approaching or receding,
-which eq. 13 between consecutive frames cannot see). ``theta_m`` is the eq. 13 threshold of
-Sect. 5 of the force-control paper (Metta et al.), expressed per window pixel.
+LK 30 iterations / eps 0.3, at least 4 of 8 failing neighbours, 3-frame persistence, blobs of
+more than 10 nodes, grid over the central 0.75 x 0.75 of the image. Departures, each measured
+in ``bench/motion.py`` (BENCHMARKS.md): a 13x13 window instead of 15x15 (same F1, 1.2x faster:
+the 100 frames/s goal), 3 pyramid levels instead of 5 (same F1: the fastest image motion of the
+evaluation, about 28 px/frame, is within the reach of 3 levels; each level costs the same per
+node, so LK is about 16 % faster), motionCUT's rule that only LK-found nodes can fail
+(``lk_status_is_failure`` false), and these additions: temporal confirmation, flow-based blob
+growth, ego-motion-warped centroids and masks (with a per-node ownership test for fast
+objects), and a looming detector (accumulated ego-motion residuals whose components expand:
+objects approaching or receding, which eq. 13 between consecutive frames cannot see).
+``theta_m`` is the eq. 13 threshold of Sect. 5 of the force-control paper (Metta et al.),
+expressed per window pixel.
 """
 
 from __future__ import annotations
@@ -59,8 +62,8 @@ class MotionSegmenterConfig(ConfigBase):
             uniformly textured object tracks well; only its border fails).
         warp_to_current: blob centroids from the nodes' positions in the current frame:
             ``p + v`` for nodes tracked without failure, ``p`` + the ego-motion flow for the
-            others (the grid is fixed in frame t, the result is about frame t+1). The mask
-            and bbox stay on the grid cells (motionCUT).
+            others (the grid is fixed in frame t, the result is about frame t+1). The bbox
+            stays on the grid cells (motionCUT); for the mask see ``mask_to_current``.
         mask_erosion: erosion of the output mask [px]: a node fails as soon as its window
             (half side ``win_size // 2``) reaches the object, so failure regions overhang the
             object by about that much.
@@ -68,6 +71,13 @@ class MotionSegmenterConfig(ConfigBase):
             from frame t to t+1 (median LK flow of its nodes that move against the
             ego-motion, else of all its nodes), so the mask is about the current frame as the
             ground truth is; false: the cells at the grid positions of frame t (motionCUT).
+        mask_ownership: with ``mask_to_current``, for blob nodes where the object moves at
+            least ``win_size`` px per frame relative to the ego-motion (failures then spread
+            over the strip it uncovers), a 5x5 eq. 13 test decides per node whether the
+            object (carried along), the background (dropped) or neither (covered in frame
+            t+1: carried by the ego-motion) owned it in frame t.
+        ownership_erosion: erosion of the mask cells of the nodes ``mask_ownership`` decided,
+            instead of ``mask_erosion`` (their cells no longer overhang the object) [px].
         accum_decay: looming detector (an addition to motionCUT,
             :mod:`~icub_pmp.vision.looming_detector`): weight of the accumulated ego-motion
             residual carried along a node's track to the next frame, memory about
@@ -77,6 +87,9 @@ class MotionSegmenterConfig(ConfigBase):
         loom_tol: expansion (|a| * rms radius of the fit t + a d + w perp(d)) an 8-connected
             component of candidates (more than ``blob_min_size`` nodes) needs to count as
             failures: an object approaching or receding, not motion parallax [px].
+        loom_fill_hull: a looming component counts with all nodes inside its convex hull on
+            the grid (the expansion centre barely moves, so the candidates form a ring or a
+            crescent around the object's interior).
         target_alpha: exponential smoothing of the tracked target centroid, weight of the
             new measurement in (0, 1] [-].
         target_hold_frames: frames the target is kept after its blob disappears.
@@ -98,7 +111,7 @@ class MotionSegmenterConfig(ConfigBase):
     cover_x_ratio: float = 0.75
     cover_y_ratio: float = 0.75
     win_size: int = 13
-    pyramid_levels: int = 5
+    pyramid_levels: int = 3
     lk_max_iter: int = 30
     lk_epsilon: float = 0.3
     theta_m: float = 40.0
@@ -115,10 +128,13 @@ class MotionSegmenterConfig(ConfigBase):
     warp_to_current: bool = True
     mask_erosion: int = 6
     mask_to_current: bool = True
+    mask_ownership: bool = True
+    ownership_erosion: int = 2
     accum_decay: float = 0.9
     accum_clip: float = 1.0
     accum_tol: float = 1.0
     loom_tol: float = 0.5
+    loom_fill_hull: bool = True
     target_alpha: float = 0.5
     target_hold_frames: int = 10
     target_max_jump: float = 60.0
@@ -169,6 +185,8 @@ class MotionSegmenterConfig(ConfigBase):
             raise bad("flow_tol", "> 0 px/frame")
         if self.mask_erosion < 0:
             raise bad("mask_erosion", ">= 0 px")
+        if self.ownership_erosion < 0:
+            raise bad("ownership_erosion", ">= 0 px")
         if not 0.0 <= self.accum_decay < 1.0:
             raise bad("accum_decay", "a weight in [0, 1)")
         for f in ("accum_clip", "accum_tol", "loom_tol"):
