@@ -190,9 +190,9 @@ def test_results_are_read_only():
 
 def test_shipped_yaml_loads():
     """config/motion_segmenter.yaml loads into MotionSegmenterConfig with motionCUT's grid,
-    neighbour, persistence and blob-size defaults, the 13 px window and 3 pyramid levels."""
+    neighbour, persistence and blob-size defaults, the 11 px window and 3 pyramid levels."""
     c = MotionSegmenterConfig.from_yaml(config_dir() / "motion_segmenter.yaml", "motion_segmenter")
-    assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 13, 3)
+    assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 11, 3)
     assert (c.adj_nodes_thres, c.frames_persistence, c.blob_min_size) == (4, 3, 10)
     assert c == MotionSegmenterConfig()
 
@@ -212,7 +212,8 @@ def test_shipped_yaml_loads():
         ("accum_clip", 0.0),
         ("accum_tol", -1.0),
         ("loom_tol", 0.0),
-        ("ownership_erosion", -1),
+        ("refine_window", 4),
+        ("refine_match", 0.0),
     ],
 )
 def test_config_rejects_out_of_range(field, value):

@@ -26,8 +26,9 @@ stays the failure criterion; additions, each measured in ``bench/motion.py`` and
 - blob growth over adjacent nodes whose flow contradicts the ego-motion homography
   (``grow_by_flow``): the interior of a translating textured object does not fail eq. 13;
 - results about frame t+1, the current frame: centroids from the nodes' tracked positions
-  (``warp_to_current``), masks carried by each blob's object motion (``mask_to_current``),
-  and for fast objects a per-node ownership test (``mask_ownership``).
+  (``warp_to_current``), masks carried by each blob's object motion (``mask_to_current``)
+  and, for objects moving against the ego-motion, refined per pixel by which of the two
+  motions explains the pixel (``mask_refine``).
 """
 
 from __future__ import annotations
@@ -89,6 +90,7 @@ class MotionSegmenter:
         e = 2 * c.mask_erosion + 1
         self._erode_kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (e, e))
         self._cell_kernel = np.ones((s, s), np.uint8)
+        self._region_kernel = np.ones((2 * s + 1, 2 * s + 1), np.uint8)
         self._looming = (
             LoomingDetector(self.nodes, self.grid_shape, s, c.accum_decay, c.accum_clip,
                             c.accum_tol, c.loom_tol, c.blob_min_size, c.loom_fill_hull)
@@ -141,6 +143,7 @@ class MotionSegmenter:
         failures, flow, disc, tracked = self._failures(prev_gray, gray)
         self._store(gray, patches)
         self._ego_flow = None
+        self._ego_h = None
         moving = reliable = np.zeros(self.grid_shape, bool)
         evidence = failures
         if self._looming is not None:
@@ -161,11 +164,10 @@ class MotionSegmenter:
         labels, blobs = self._blobs(active, disp, flow)
         if c.mask_to_current and blobs:
             mov = moving & reliable if self._ego_flow is not None else np.zeros_like(active)
-            on, offsets, tested = self._to_current(labels, len(blobs), flow, mov, disp,
-                                                   prev_gray, gray)
-            mask = self._paint(on & ~tested, offsets, c.mask_erosion)
-            if tested.any():
-                mask |= self._paint(on & tested, offsets, c.ownership_erosion)
+            offsets, own = self._object_motions(labels, len(blobs), flow, mov, disp)
+            mask = self._paint(labels > 0, offsets, c.mask_erosion)
+            if c.mask_refine and self._ego_h is not None:
+                mask = self._refine(mask, labels, offsets, own, prev_gray, gray)
         else:
             mask = self._mask(labels)
         return self._result(blobs, mask, failures, labels > 0, flow, disc)
@@ -309,6 +311,7 @@ class MotionSegmenter:
         h, _ = cv2.findHomography(src, src + v[fit], cv2.RANSAC, c.flow_tol)
         if h is None:
             return none, none
+        self._ego_h = h
         pred = cv2.perspectiveTransform(self.nodes[None], h)[0] - self.nodes
         self._ego_flow = pred.reshape(rows, cols, 2)
         res = np.linalg.norm(np.nan_to_num(v - pred, nan=0.0), axis=1)
@@ -394,69 +397,83 @@ class MotionSegmenter:
             )
         return relabel[labels], out
 
-    def _to_current(self, labels: np.ndarray, n_blobs: int, flow: np.ndarray,
-                    moving: np.ndarray, disp: np.ndarray, prev_gray: np.ndarray,
-                    gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Where each blob node lies in frame t+1: (on, offsets) grids, offsets [px].
+    def _object_motions(self, labels: np.ndarray, n_blobs: int, flow: np.ndarray,
+                        moving: np.ndarray, disp: np.ndarray
+                        ) -> tuple[np.ndarray, list[np.ndarray | None]]:
+        """Each blob's object motion from frame t to t+1 [px]: (offsets grid, per blob).
 
-        A blob's object motion ``v_obj`` is the median LK flow of its nodes that move against
-        the ego-motion (at least 3), else the median displacement of its nodes; every node is
-        carried by ``v_obj``. With ``mask_ownership``, and where ``v_obj`` differs from the
-        ego-motion by at least ``grid_step / 3`` px, a 5x5 eq. 13 test around the node decides
-        who owned it in frame t: the object (its patch is found at ``p + v_obj``: carried by
-        ``v_obj``), the background (found at ``p + v_ego``: the node failed only because its
-        window overlapped the object, dropped) or neither (the object covers it in frame
-        t+1: carried by ``v_ego``, where the object now is).
+        ``v_obj`` is the median LK flow of the blob's nodes that move against the ego-motion
+        (at least 3; the per-blob entry, else None), else the median displacement of its
+        nodes. Every node of the blob gets ``v_obj`` in the (rows, cols, 2) offsets grid.
         """
-        c = self.config
         rows, cols = self.grid_shape
-        on = labels > 0
-        tested = np.zeros(rows * cols, bool)
         offsets = np.zeros((rows * cols, 2), np.float32)
-        ego = None if self._ego_flow is None else self._ego_flow.reshape(-1, 2)
+        own: list[np.ndarray | None] = []
         flat = labels.ravel()
         for k in range(1, n_blobs + 1):
             blob = flat == k
             m = blob & moving.ravel()
-            own = m.sum() >= 3
-            d = flow.reshape(-1, 2)[m] if own else disp.reshape(-1, 2)[blob]
+            d = flow.reshape(-1, 2)[m] if m.sum() >= 3 else disp.reshape(-1, 2)[blob]
             v_obj = np.median(np.nan_to_num(d), axis=0)
             offsets[blob] = v_obj
-            if not (c.mask_ownership and own and ego is not None):
-                continue
-            idx = np.nonzero(blob)[0]
-            v_ego = ego[idx]
-            distinct = np.linalg.norm(v_ego - v_obj, axis=1) >= c.win_size
-            idx, v_ego = idx[distinct], v_ego[distinct]
-            if idx.size == 0:
-                continue
-            v_obj_k = np.broadcast_to(v_obj, v_ego.shape)
-            e_obj = self._small_discrepancy(prev_gray, gray, idx, v_obj_k)
-            e_ego = self._small_discrepancy(prev_gray, gray, idx, v_ego)
-            background = (e_ego < c.theta_m) & (e_ego <= e_obj)
-            covered = (e_obj >= c.theta_m) & (e_ego >= c.theta_m)
-            on.ravel()[idx[background]] = False
-            offsets[idx[covered]] = v_ego[covered]
-            tested[idx] = True
-        return on, offsets.reshape(rows, cols, 2), tested.reshape(rows, cols)
+            own.append(v_obj if m.sum() >= 3 else None)
+        return offsets.reshape(rows, cols, 2), own
 
-    def _small_discrepancy(self, prev_gray: np.ndarray, gray: np.ndarray, idx: np.ndarray,
-                           v: np.ndarray) -> np.ndarray:
-        """Eq. 13 per pixel over a 5x5 window for nodes ``idx`` displaced by ``v`` (K, 2)."""
-        p = self.nodes[idx]
-        qy, qx = np.mgrid[-2:3, -2:3]
-        px = (p[:, 0, None, None] + qx).astype(np.intp)
-        py = (p[:, 1, None, None] + qy).astype(np.intp)
-        before = prev_gray[py, px].astype(np.float32).reshape(-1, 5)
-        mx = (px + v[:, 0, None, None]).astype(np.float32).reshape(-1, 5)
-        my = (py + v[:, 1, None, None]).astype(np.float32).reshape(-1, 5)
-        after = cv2.remap(gray, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        diff = before - after.astype(np.float32)
-        return (diff * diff).reshape(-1, 25).mean(axis=1)
+    def _refine(self, mask: np.ndarray, labels: np.ndarray, offsets: np.ndarray,
+                own: list[np.ndarray | None], prev_gray: np.ndarray, gray: np.ndarray
+                ) -> np.ndarray:
+        """Pixel-level masks of the blobs whose object moves against the ego-motion.
+
+        For a blob with its own motion ``v_obj`` differing from the ego-motion by at least
+        ``refine_min_motion`` px, every pixel x of its cells (carried to frame t+1, dilated
+        by one cell) is explained by one of two motions: the object's, ``I_{t+1}(x)`` vs
+        ``I_t(x - v_obj)``, or the background's, ``I_{t+1}(x)`` vs ``I_t(H^-1 x)`` (the
+        ego-motion homography H). With ``e`` = mean squared difference over a
+        ``refine_window`` box (eq. 13 per pixel): x is the object's if ``e_obj <
+        refine_match`` and ``2 e_obj < e_ego``; if both motions explain it (untextured) the
+        cell mask decides; otherwise (the background it uncovers, the background around it)
+        it is not. Frame t+1 is the current frame: the mask is about it.
+        """
+        c = self.config
+        out = mask.copy()
+        hinv = np.linalg.inv(self._ego_h)
+        ego = self._ego_flow.reshape(-1, 2)
+        flat = labels.ravel()
+        r = c.refine_window
+        for k, v_obj in enumerate(own, start=1):
+            if v_obj is None:
+                continue
+            blob = flat == k
+            if np.linalg.norm(v_obj - np.median(ego[blob], axis=0)) < c.refine_min_motion:
+                continue
+            region = cv2.dilate(self._paint(blob.reshape(self.grid_shape), offsets, 0),
+                                self._region_kernel)
+            ys, xs = np.nonzero(region)
+            if ys.size == 0:
+                continue
+            y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+            gy, gx = np.mgrid[y0:y1, x0:x1].astype(np.float32)
+            now = gray[y0:y1, x0:x1].astype(np.float32)
+            b_obj = cv2.remap(prev_gray, gx - np.float32(v_obj[0]), gy - np.float32(v_obj[1]),
+                              cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            den = hinv[2, 0] * gx + hinv[2, 1] * gy + hinv[2, 2]
+            ex = ((hinv[0, 0] * gx + hinv[0, 1] * gy + hinv[0, 2]) / den).astype(np.float32)
+            ey = ((hinv[1, 0] * gx + hinv[1, 1] * gy + hinv[1, 2]) / den).astype(np.float32)
+            b_ego = cv2.remap(prev_gray, ex, ey, cv2.INTER_LINEAR,
+                              borderMode=cv2.BORDER_REPLICATE)
+            e_obj = cv2.boxFilter((now - b_obj) ** 2, -1, (r, r))
+            e_ego = cv2.boxFilter((now - b_ego) ** 2, -1, (r, r))
+            obj = (e_obj < c.refine_match) & (2.0 * e_obj < e_ego)
+            both = (e_obj < c.refine_match) & (e_ego < c.refine_match) & ~obj
+            reg = region[y0:y1, x0:x1] > 0
+            keep = obj | (both & (mask[y0:y1, x0:x1] > 0))
+            sub = out[y0:y1, x0:x1]
+            sub[reg] = np.where(keep[reg], 255, 0).astype(np.uint8)
+        return out
 
     def _paint(self, on: np.ndarray, offsets: np.ndarray, erosion: int) -> np.ndarray:
-        """Paint a grid_step x grid_step cell (255) around ``p + offset`` of every ON node,
-        then erode by ``erosion`` px."""
+        """Paint a grid_step x grid_step cell (255) around ``p + offset`` of every ON node
+        of the (rows, cols) grid ``on``, then erode by ``erosion`` px."""
         c = self.config
         mask = np.zeros((c.image_height, c.image_width), np.uint8)
         sel = on.ravel()

@@ -3,14 +3,15 @@
 Defaults follow motionCUT as coded in icub-main (``ICUB_FACTS.md`` section 1c): grid step 6 px,
 LK 30 iterations / eps 0.3, at least 4 of 8 failing neighbours, 3-frame persistence, blobs of
 more than 10 nodes, grid over the central 0.75 x 0.75 of the image. Departures, each measured
-in ``bench/motion.py`` (BENCHMARKS.md): a 13x13 window instead of 15x15 (same F1, 1.2x faster:
-the 100 frames/s goal), 3 pyramid levels instead of 5 (same F1: the fastest image motion of the
-evaluation, about 28 px/frame, is within the reach of 3 levels; each level costs the same per
-node, so LK is about 16 % faster), motionCUT's rule that only LK-found nodes can fail
+in ``bench/motion.py`` (BENCHMARKS.md): an 11x11 window instead of 15x15 (13x13 gave the same
+F1 at 1.2x the speed, 11x11 the same F1 again at a further 1.35x: the 100 frames/s goal), 3
+pyramid levels instead of 5 (same F1: the fastest image motion of the evaluation, about
+28 px/frame, is within the reach of 3 levels; each level costs the same per node, so LK is
+about 16 % faster), motionCUT's rule that only LK-found nodes can fail
 (``lk_status_is_failure`` false), and these additions: temporal confirmation, flow-based blob
-growth, ego-motion-warped centroids and masks (with a per-node ownership test for fast
-objects), and a looming detector (accumulated ego-motion residuals whose components expand:
-objects approaching or receding, which eq. 13 between consecutive frames cannot see).
+growth, ego-motion-warped centroids and masks (refined per pixel for objects that move against
+the ego-motion), and a looming detector (accumulated ego-motion residuals whose components
+expand: objects approaching or receding, which eq. 13 between consecutive frames cannot see).
 ``theta_m`` is the eq. 13 threshold of Sect. 5 of the force-control paper (Metta et al.),
 expressed per window pixel.
 """
@@ -71,13 +72,16 @@ class MotionSegmenterConfig(ConfigBase):
             from frame t to t+1 (median LK flow of its nodes that move against the
             ego-motion, else of all its nodes), so the mask is about the current frame as the
             ground truth is; false: the cells at the grid positions of frame t (motionCUT).
-        mask_ownership: with ``mask_to_current``, for blob nodes where the object moves at
-            least ``win_size`` px per frame relative to the ego-motion (failures then spread
-            over the strip it uncovers), a 5x5 eq. 13 test decides per node whether the
-            object (carried along), the background (dropped) or neither (covered in frame
-            t+1: carried by the ego-motion) owned it in frame t.
-        ownership_erosion: erosion of the mask cells of the nodes ``mask_ownership`` decided,
-            instead of ``mask_erosion`` (their cells no longer overhang the object) [px].
+        mask_refine: with ``mask_to_current``, refine per pixel the masks of blobs whose
+            object moves against the ego-motion by ``refine_min_motion`` or more: a pixel is
+            the object's when the object's motion explains it (``I_{t+1}(x)`` vs
+            ``I_t(x - v_obj)``, mean squared difference over ``refine_window`` below
+            ``refine_match`` and under half that of the ego-motion homography); untextured
+            pixels both explain keep the cell mask.
+        refine_min_motion: object motion relative to the ego-motion needed to refine [px/frame].
+        refine_window: side of the box the pixel test averages over (odd) [px].
+        refine_match: mean squared difference below which a motion explains a pixel
+            [grey level^2].
         accum_decay: looming detector (an addition to motionCUT,
             :mod:`~icub_pmp.vision.looming_detector`): weight of the accumulated ego-motion
             residual carried along a node's track to the next frame, memory about
@@ -110,7 +114,7 @@ class MotionSegmenterConfig(ConfigBase):
     grid_step: int = 6
     cover_x_ratio: float = 0.75
     cover_y_ratio: float = 0.75
-    win_size: int = 13
+    win_size: int = 11
     pyramid_levels: int = 3
     lk_max_iter: int = 30
     lk_epsilon: float = 0.3
@@ -126,10 +130,12 @@ class MotionSegmenterConfig(ConfigBase):
     flow_tol: float = 0.5
     fill_holes: bool = True
     warp_to_current: bool = True
-    mask_erosion: int = 6
+    mask_erosion: int = 5
     mask_to_current: bool = True
-    mask_ownership: bool = True
-    ownership_erosion: int = 2
+    mask_refine: bool = True
+    refine_min_motion: float = 2.0
+    refine_window: int = 5
+    refine_match: float = 150.0
     accum_decay: float = 0.9
     accum_clip: float = 1.0
     accum_tol: float = 1.0
@@ -185,8 +191,12 @@ class MotionSegmenterConfig(ConfigBase):
             raise bad("flow_tol", "> 0 px/frame")
         if self.mask_erosion < 0:
             raise bad("mask_erosion", ">= 0 px")
-        if self.ownership_erosion < 0:
-            raise bad("ownership_erosion", ">= 0 px")
+        if self.refine_min_motion < 0.0:
+            raise bad("refine_min_motion", ">= 0 px/frame")
+        if self.refine_window < 1 or self.refine_window % 2 == 0:
+            raise bad("refine_window", "an odd box side >= 1 px")
+        if self.refine_match <= 0.0:
+            raise bad("refine_match", "> 0 grey level^2")
         if not 0.0 <= self.accum_decay < 1.0:
             raise bad("accum_decay", "a weight in [0, 1)")
         for f in ("accum_clip", "accum_tol", "loom_tol"):
