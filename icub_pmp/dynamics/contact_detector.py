@@ -41,8 +41,8 @@ class ContactDetector:
 
     def update(self, force: np.ndarray) -> bool:
         """Feed the force (3,) [N] of one sample; returns the contact flag."""
-        force = np.asarray(force, dtype=float)
-        f = math.sqrt(force @ force)
+        fx, fy, fz = force  # three scalars: cheaper than a numpy norm at 1 kHz
+        f = math.hypot(fx, fy, fz)
         switching = f < self.force_off if self.in_contact else f > self.force_on
         self._count = self._count + 1 if switching else 0
         if self._count >= self.min_samples:

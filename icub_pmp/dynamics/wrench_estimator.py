@@ -39,6 +39,8 @@ from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
 
 __all__ = ["WrenchEstimator", "WrenchEstimate"]
 
+_LEFT, _RIGHT = HANDS
+
 
 class WrenchEstimate(NamedTuple):
     """One estimator output (time ``t`` [s]).
@@ -167,6 +169,21 @@ class WrenchEstimator:
             raise InvalidInput(f"{name}: contains NaN or infinite values")
         return x
 
+    @staticmethod
+    def _reject_ft(ft: Mapping[str, np.ndarray]) -> None:
+        """Raise InvalidInput naming what is wrong with the FT wrenches ``ft``."""
+        for h in HANDS:
+            try:
+                w = np.asarray(ft[h], dtype=float)
+            except (KeyError, TypeError):
+                raise InvalidInput(f"ft: missing the {h} arm wrench (need {HANDS})") from None
+            except ValueError:
+                raise InvalidInput(f"ft[{h!r}]: expected 6 finite values, got {ft[h]!r}") \
+                    from None
+            if w.shape != (6,) or not np.all(np.isfinite(w)):
+                raise InvalidInput(f"ft[{h!r}]: expected 6 finite values, got {w!r}")
+        raise InvalidInput(f"ft: expected 6 finite values per hand, got {ft!r}")
+
     def _gravity_from_imu(self, q: np.ndarray, acc: np.ndarray) -> None:
         acc = np.asarray(acc, dtype=float)
         if acc.shape != (3,) or not np.all(np.isfinite(acc)):
@@ -196,16 +213,17 @@ class WrenchEstimator:
         if v is not None:
             v = self._check(v, "v")
         # x: measured FT wrenches in the sensor's convention (filtered, offsets removed below)
-        x = {}
+        try:  # both hands in one array: one copy and one finiteness test per sample
+            w = np.concatenate((ft[_LEFT], ft[_RIGHT]), dtype=float)
+        except (KeyError, TypeError, ValueError):
+            w = None
+        if w is None or w.shape != (12,) or not math.isfinite(w @ w):
+            self._reject_ft(ft)
+        x = {_LEFT: w[:6], _RIGHT: w[6:]}
         for h in HANDS:
-            try:
-                w = np.array(ft[h], dtype=float)  # a copy: it is returned in the estimate
-            except (KeyError, TypeError):
-                raise InvalidInput(f"ft: missing the {h} arm wrench (need {HANDS})") from None
-            if w.shape != (6,) or not math.isfinite(w @ w):
-                raise InvalidInput(f"ft[{h!r}]: expected 6 finite values, got {w!r}")
             f = self._ft_filter[h]
-            x[h] = f(w) if f.enabled else w
+            if f.enabled:
+                x[h] = f(x[h])
         cfg = self.config
         if cfg.gravity_source == "imu":
             if imu_acc is None:
