@@ -159,6 +159,10 @@ def test_bad_inputs_rejected_and_nothing_changes(truth, icub):
         est.update(1e-3, q, None, {"left": ft["left"]})
     with pytest.raises(InvalidInput, match="finite"):
         est.update(1e-3, q, None, {"left": ft["left"], "right": np.full(6, np.inf)})
+    with pytest.raises(InvalidInput, match="left"):
+        est.update(1e-3, q, None, {"left": ft["left"][:5], "right": ft["right"]})
+    with pytest.raises(InvalidInput, match="left"):
+        est.update(1e-3, q, None, {"left": "abc", "right": ft["right"]})
 
 
 @pytest.mark.parametrize(
