@@ -71,9 +71,16 @@ class JointStateFilter:
         dt = float(t) - self._t
         if dt <= 0.0:
             return FilteredState(self._q.copy(), self._v.copy(), self._a.copy())
-        raw_v = (q - self._q) / dt if v is None else np.asarray(v, dtype=float)
-        v_f = self._fv(raw_v) if self._fv.enabled else raw_v.copy()
-        self._a = self._fa((v_f - self._v) / dt)
+        inv_dt = 1.0 / dt
+        if v is None:
+            raw_v = q - self._q
+            raw_v *= inv_dt
+        else:
+            raw_v = np.array(v, dtype=float)  # a copy: kept as the state
+        v_f = self._fv(raw_v) if self._fv.enabled else raw_v
+        dv = v_f - self._v
+        dv *= inv_dt
+        self._a = self._fa(dv)
         self._v = v_f
         self._q, self._t = q.copy(), float(t)
         return FilteredState(self._q, v_f, self._a)
