@@ -1,9 +1,11 @@
-"""The eq 11 Cartesian solver (IkSolver, CasADi + IPOPT) and the DLS baseline."""
+"""The eq 11 Cartesian solver (IkSolver, CasADi + IPOPT, its warm-start seed) and the DLS
+baseline."""
 
 from __future__ import annotations
 
 import math
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -203,8 +205,10 @@ def test_unreachable_target_reports_the_residual(solver):
 
 
 def test_solve_time_is_bounded(model):
-    """With a tiny wall-time budget IPOPT stops early; the solver reports it, no exception."""
-    quick = IkSolver(model, _cfg(max_solve_time=1e-4))
+    """With a tiny wall-time budget IPOPT stops early; the solver reports it, no exception.
+    (Without the seed: warm-started from it, IPOPT may certify the seed's point before the
+    first wall-time check; the seed itself is a fixed number of iterations.)"""
+    quick = IkSolver(model, _cfg(max_solve_time=1e-4, seed_warm_start=False))
     T = _targets(model, 1, seed=4)[0]
     sol = quick.solve(CHAIN, T.translation, T.rotation)
     assert sol.status == "Maximum_WallTime_Exceeded"
@@ -293,7 +297,7 @@ def test_additional_nonlinear_constraint(model):
     """An extra nonlinear constraint (hand x axis pointing down: R[2, 0] <= -0.9, a 'palm
     orientation' limit) holds at the solution of a position-only request, whereas the solution
     without it violates it; a malformed constraint is rejected."""
-    import casadi as ca
+
 
     from icub_pmp.cartesian import NlpConstraint
 
@@ -322,7 +326,7 @@ def test_lifted_form_solves_eq11_itself(model, solver):
     epsilon). IPOPT's answers are KKT points of eq 11 as written (||x_d - K_x(q)||^2 <=
     epsilon): s equals the hand's error, and with IPOPT's multipliers the gradient of eq 11's
     own Lagrangian vanishes (to IPOPT's tolerance), the bound multiplier being >= 0."""
-    import casadi as ca
+
 
     from icub_pmp.cartesian.ik_problem import POSITION_SCALE
 
@@ -354,3 +358,123 @@ def test_lifted_form_solves_eq11_itself(model, solver):
             lam_direct = lam_g[3 : 4 + m]  # the same multipliers serve eq 11's direct form
             stationarity = grad_f.reshape(-1) + jac_g.T @ lam_direct + lam_x
             assert np.abs(stationarity).max() <= 10 * solver.config.tol, stationarity
+
+
+# ---------------------------------------------------------------------------- the seed
+# The warm-start seed (icub_pmp.cartesian.ik_seed.IkSeed): the answer is always IPOPT's; the
+# seed (a fixed-iteration Newton method on eq 11) only gives the warm-started IPOPT its starting
+# point and multipliers, with IPOPT from the start joints as the fallback. `solver` runs with
+# the seed (the default), `plain` without.
+
+
+@pytest.fixture(scope="module")
+def plain(model) -> IkSolver:
+    return IkSolver(model, _cfg(seed_warm_start=False))
+
+
+def _objective(solver, rot):
+    """Eq 11's objective at joints q for the solver's weights, as a function of (q, target)."""
+    prob = solver.problem(CHAIN)
+    f = ca.Function("f", [prob.q, prob.p], [prob.f])
+    q_rest = solver.model.posture("rest")[solver.model.indices(prob.chain.joints)]
+
+    def value(q, T):
+        p = prob.parameters(T.translation, None if rot is None else T.rotation,
+                            solver.config.orientation_weight, solver.rest_weights(prob.chain),
+                            q_rest, np.zeros(0))
+        return float(f(q, p))
+
+    return value
+
+
+def test_seeded_answers_meet_eq11_and_match_ipopt_from_rest(model, solver, plain):
+    """On random reachable targets (position and pose) the seeded solver's answers are
+    warm-started IPOPT answers (most of them), meet eq 11's constraints (squared position error
+    within epsilon + IPOPT's tolerance, joint limits, shoulder constraints), reach 1 deg with
+    orientation, have an objective no worse than IPOPT's from rest (1e-6 + 1 %) and need fewer
+    IPOPT iterations in total."""
+    seeded = solver
+    cfg = seeded.config
+    prob = seeded.problem(CHAIN)
+    n_seeded, its_seeded, its_plain = 0, 0, 0
+    for T in _targets(model, 6, seed=31):
+        for rot in (None, T.rotation):
+            a = seeded.solve(CHAIN, T.translation, rot)
+            b = plain.solve(CHAIN, T.translation, rot)
+            assert a.success and b.success, (a.message, b.message)
+            assert a.position_error ** 2 <= cfg.epsilon + cfg.constraint_tolerance
+            assert np.all(a.q >= prob.lbx) and np.all(a.q <= prob.ubx)
+            assert a.constraint_violation <= 1e-6
+            if rot is not None:
+                assert math.degrees(a.orientation_error) < 1.0
+            f = _objective(seeded, rot)
+            fa, fb = f(a.q, T), f(b.q, T)
+            assert fa <= fb * 1.01 + 1e-6, (fa, fb)
+            n_seeded += a.seeded
+            its_seeded += a.iterations
+            its_plain += b.iterations
+            assert not b.seeded
+    assert n_seeded >= 6  # of 12
+    assert its_seeded < its_plain
+
+
+def test_seed_point_is_a_local_minimum_of_eq11(model, solver):
+    seeded = solver
+    """On a position target the seed alone ends within 1 mm of the target, inside the joint
+    limits, with s on the epsilon ball and a positive multiplier on it, and passes its
+    second-order check; IPOPT warm-started there needs at most 3 iterations."""
+    prob = seeded.problem(CHAIN)
+    T = _targets(model, 1, seed=32)[0]
+    q_rest = model.posture("rest")[model.indices(prob.chain.joints)]
+    p = prob.parameters(T.translation, None, 1.0, seeded.rest_weights(prob.chain), q_rest,
+                        np.zeros(0))
+    eps = seeded.config.epsilon
+    x0, lam_x, lam_g, perr, minimum = prob.seed(q_rest, p, eps)
+    n = prob.chain.n
+    assert perr <= 1e-3 and minimum
+    assert np.all(x0[:n] >= prob.lbx) and np.all(x0[:n] <= prob.ubx)
+    assert np.linalg.norm(x0[n:]) == pytest.approx(math.sqrt(eps), rel=1e-9)
+    assert lam_g[3] > 0.0
+    sol = seeded.solve(CHAIN, T.translation)
+    assert sol.seeded and sol.success
+    assert sol.iterations <= 3
+
+
+def test_a_seed_that_misses_falls_back_to_ipopt_from_the_start(solver, plain):
+    seeded = solver
+    """An unreachable target: the seed cannot reach it, IPOPT runs from the start joints as
+    without the seed: the same answer (the residual reported, success False)."""
+    a = seeded.solve(CHAIN, [-2.0, 0.0, 0.0])
+    b = plain.solve(CHAIN, [-2.0, 0.0, 0.0])
+    assert not a.seeded and not a.success
+    np.testing.assert_allclose(a.q, b.q, atol=1e-9)
+    assert a.position_error == pytest.approx(b.position_error, abs=1e-9)
+    assert "not reached" in a.message
+
+
+def test_seed_starts_from_the_given_joints(model, solver):
+    seeded = solver
+    """The node's warm start: from the previous answer the seeded solve returns (nearly) the
+    same joints and stays seeded."""
+    T = _targets(model, 1, seed=33)[0]
+    first = seeded.solve(CHAIN, T.translation, T.rotation)
+    again = seeded.solve(CHAIN, T.translation, T.rotation, seeded.full_q(first))
+    assert again.success
+    np.testing.assert_allclose(again.q, first.q, atol=1e-3)
+
+
+def test_compiled_seed_matches_the_casadi_vm(model, solver):
+    seeded = solver
+    """The gcc-compiled seed gives the same point and multipliers as CasADi's VM."""
+    compiled = IkSolver(model, _cfg(codegen=True)).problem(CHAIN)
+    assert compiled.seed.compiled
+    prob = seeded.problem(CHAIN)
+    T = _targets(model, 1, seed=34)[0]
+    q_rest = model.posture("rest")[model.indices(prob.chain.joints)]
+    p = prob.parameters(T.translation, T.rotation, 1.0, seeded.rest_weights(prob.chain), q_rest,
+                        np.zeros(0))
+    a = compiled.seed(q_rest, p, 2.5e-7)
+    b = prob.seed(q_rest, p, 2.5e-7)
+    for u, v in zip(a[:3], b[:3]):
+        np.testing.assert_allclose(u, v, atol=1e-8)
+    assert a[3] == pytest.approx(b[3], abs=1e-9) and a[4] == b[4]

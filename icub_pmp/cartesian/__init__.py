@@ -10,6 +10,7 @@ from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
 from icub_pmp.cartesian.dls_solver import DlsConfig, DlsSolver
 from icub_pmp.cartesian.ik_config import IkConfig
 from icub_pmp.cartesian.ik_problem import IkProblem, NlpConstraint
+from icub_pmp.cartesian.ik_seed import IkSeed
 from icub_pmp.cartesian.ik_solution import IkSolution
 from icub_pmp.cartesian.ik_solver import IkSolver, rotation_angle
 from icub_pmp.cartesian.kinematic_chain import CHAIN_NAMES, KinematicChain
@@ -28,6 +29,7 @@ __all__ = [
     "IkConfig",
     "IkProblem",
     "NlpConstraint",
+    "IkSeed",
     "IkSolution",
     "IkSolver",
     "rotation_angle",

@@ -36,6 +36,10 @@ class IkConfig(ConfigBase):
             a broken install) and is loose enough that a loaded machine (solves 4-6 times
             slower, measured here) does not change the answers.
         codegen: compile the NLP functions to C with gcc (cached on disk) for speed.
+        seed_warm_start: start IPOPT warm (primal point and multipliers) from a compiled
+            fixed-iteration Newton seed on eq 11 (:class:`IkSeed`) run from the start joints;
+            IPOPT's answer is returned, and IPOPT from the usual start is the fallback when
+            the seed misses the target or the warm-started IPOPT does not converge.
     """
 
     epsilon: float = 2.5e-7
@@ -50,6 +54,7 @@ class IkConfig(ConfigBase):
     max_iter: int = 200
     max_solve_time: float = 0.5
     codegen: bool = True
+    seed_warm_start: bool = True
 
     def validate(self) -> None:
         """Check ranges (raise :class:`ConfigError` naming the field)."""

@@ -93,6 +93,8 @@ class IkProblem:
         lbx, ubx: joint limits (n,) [rad] from the URDF.
         linear: the linear constraints (C, lb, ub) over ``q`` (empty when disabled).
         solver: the CasADi ``nlpsol`` (IPOPT, exact Hessian).
+        warm_solver: the same NLP and IPOPT, set to start from a given primal-dual point
+            (the seed's, see :attr:`seed`).
         compiled: whether the NLP functions run as compiled C.
     """
 
@@ -173,15 +175,43 @@ class IkProblem:
             "ipopt.fast_step_computation": "yes",
             "record_time": False,
         }
+        # the same NLP for a start from the seed's point and multipliers (IkSeed): IPOPT takes
+        # them as they are (no push into the interior, barrier parameter already small), so a
+        # KKT point is certified in ~0-2 iterations instead of re-converging from mu = 0.1
+        warm_opts = dict(opts)
+        warm_opts.update({
+            "ipopt.warm_start_init_point": "yes",
+            "ipopt.mu_init": 1e-6,
+            "ipopt.warm_start_bound_push": 1e-9,
+            "ipopt.warm_start_bound_frac": 1e-9,
+            "ipopt.warm_start_slack_bound_push": 1e-9,
+            "ipopt.warm_start_slack_bound_frac": 1e-9,
+            "ipopt.warm_start_mult_bound_push": 1e-9,
+        })
         nlp = {"x": ca.vertcat(self.q, self.s), "p": self.p, "f": self.f, "g": self.g}
         name = f"ik_{chain.name}{'_lin' if self.linear is not None else ''}"
         name += "".join(f"_{c.name}" for c in self.constraints if c.name.isidentifier())
+        self.name = name
         if config.codegen:
-            (self.solver,), self.compiled = compiled_nlpsol(name, nlp, opts)
+            (self.solver, self.warm_solver), self.compiled = compiled_nlpsol(
+                name, nlp, opts, warm_opts
+            )
         else:
-            self.solver, self.compiled = ca.nlpsol(name, "ipopt", nlp, opts), False
+            self.solver = ca.nlpsol(name, "ipopt", nlp, opts)
+            self.warm_solver = ca.nlpsol(name, "ipopt", nlp, warm_opts)
+            self.compiled = False
+        self._seed = None
         self.n_linear = 0 if self.linear is None else self.linear.C.shape[0]
         self._fk_position = ca.Function("fk_position", [self.q, self.p], [fk_pos])
+
+    @property
+    def seed(self):
+        """The compiled warm-start seed (:class:`IkSeed`), built on first use."""
+        if self._seed is None:
+            from icub_pmp.cartesian.ik_seed import IkSeed
+
+            self._seed = IkSeed(self, codegen=self.config.codegen)
+        return self._seed
 
     # ------------------------------------------------------------------ run-time data
     def parameters(

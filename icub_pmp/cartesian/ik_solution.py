@@ -32,6 +32,8 @@ class IkSolution:
         status: IPOPT return status (``Solve_Succeeded``, ``Infeasible_Problem_Detected``,
             ``Maximum_WallTime_Exceeded`` ...) or ``exception``.
         message: one line for a user (why it failed, or a summary).
+        seeded: the answer is IPOPT's, warm-started from the seed (:class:`IkSeed`);
+            False when IPOPT ran from the start joints (seed off, missed, or fallback).
     """
 
     success: bool
@@ -48,6 +50,7 @@ class IkSolution:
     iterations: int
     status: str
     message: str
+    seeded: bool = False
 
     def __post_init__(self) -> None:
         for name in ("q", "position", "rotation"):

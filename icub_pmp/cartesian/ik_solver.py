@@ -4,6 +4,12 @@ Mirrors iKinCartesianSolver (Sect. 4 of the reaching paper): position as a const
 orientation and rest posture in the cost, joint limits and the iCub shoulder constraints,
 warm-started from the current joints, IPOPT bounded in iterations and wall time. Problems are
 built lazily, once per chain (:meth:`problem`), and reused for every solve.
+
+With ``seed_warm_start`` (default) a compiled fixed-iteration Newton method on eq 11
+(:class:`~icub_pmp.cartesian.ik_seed.IkSeed`, ~0.3 ms) runs first from the start joints; when
+its point reaches the target and passes a second-order check, IPOPT starts warm from it (primal
+point and multipliers) and typically certifies it in 0-2 iterations. The answer is always
+IPOPT's; IPOPT from the start joints is the fallback (seed missed, or warm start not converged).
 """
 
 from __future__ import annotations
@@ -133,26 +139,43 @@ class IkSolver:
         lbg, ubg = prob.g_bounds(eps)
         lbx, ubx = prob.x_bounds
         x0 = np.clip(q_full[idx], prob.lbx, prob.ubx)
+        bounds = dict(p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         t0 = time.perf_counter()
-        try:
-            res = prob.solver(x0=prob.start(x0, p), p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
-            stats = prob.solver.stats()
-            q = np.array(res["x"], dtype=float).reshape(-1)[: kc.n]
-            status = str(stats.get("return_status", "unknown"))
-            iterations = int(stats.get("iter_count", 0))
-        except RuntimeError as exc:  # CasADi raises on evaluation errors (NaN in functions)
-            q, status, iterations = x0, "exception", 0
-            status_detail = str(exc).splitlines()[0] if str(exc) else "error"
-        else:
-            status_detail = status
+        seeded, iterations = False, 0
+        if self.config.seed_warm_start:
+            seeded, q, status, status_detail, iterations = self._seeded_solve(prob, x0, eps,
+                                                                              bounds)
+        if not seeded:
+            q, status, status_detail, its = _run(prob.solver, kc.n, x0,
+                                                 x0=prob.start(x0, p), **bounds)
+            iterations += its
         dt = time.perf_counter() - t0
-        if not np.all(np.isfinite(q)):
-            q, status = x0, "exception"
         q = np.clip(q, prob.lbx, prob.ubx)  # IPOPT relaxes bounds by ~1e-8 rad
         return self._evaluate(prob, q, p, x_d, R_d, q_fixed, eps, dt, iterations, status,
-                              status_detail)
+                              status_detail, seeded)
 
-    def _evaluate(self, prob, q, p, x_d, R_d, q_fixed, eps, dt, iterations, status, detail):
+    # the seed's point goes to the warm-started IPOPT only when its hand is this close to the
+    # target [m]: from a seed that has not converged (mostly pose targets, whose cost is not
+    # convex) the warm start needs more iterations than IPOPT from the start joints
+    SEED_ACCEPT = 1e-3
+
+    def _seeded_solve(self, prob: IkProblem, x0: np.ndarray, eps: float, bounds: dict):
+        """IPOPT warm-started from :class:`IkSeed` (run from ``x0``): (seeded, q, status,
+        detail, iterations); seeded is False (and IPOPT must run from the usual start) when the
+        seed misses the target by more than SEED_ACCEPT, stops at a point that is not a local
+        minimum (second-order check) or the warm start does not converge."""
+        try:
+            xs, lam_x, lam_g, perr, minimum = prob.seed(x0, bounds["p"], eps)
+        except (RuntimeError, np.linalg.LinAlgError):
+            return False, x0, "exception", "seed failed", 0
+        if not (perr <= self.SEED_ACCEPT and minimum and np.all(np.isfinite(xs))):
+            return False, x0, "seed_missed", "seed missed", 0
+        q, status, detail, its = _run(prob.warm_solver, prob.chain.n, x0, x0=xs, lam_x0=lam_x,
+                                      lam_g0=lam_g, **bounds)
+        return status in _CONVERGED, q, status, detail, its
+
+    def _evaluate(self, prob, q, p, x_d, R_d, q_fixed, eps, dt, iterations, status, detail,
+                  seeded=False):
         pos, rot = prob.kinematics.pose(np.concatenate([np.asarray(q_fixed, float), q]))
         perr = float(np.linalg.norm(x_d - pos))
         oerr = math.nan if R_d is None else rotation_angle(R_d, rot)
@@ -189,6 +212,7 @@ class IkSolver:
             iterations=iterations,
             status=status,
             message=msg,
+            seeded=seeded,
         )
 
     def full_q(self, solution: IkSolution, q_start: np.ndarray | None = None) -> np.ndarray:
@@ -196,6 +220,23 @@ class IkSolver:
         q = np.array(self._q_rest_full if q_start is None else self.model.check_q(q_start))
         q[self.model.indices(solution.joint_names)] = solution.q
         return q
+
+
+def _run(solver, n: int, q_fallback: np.ndarray, **args):
+    """One IPOPT call: (q (n,), status, detail, iterations); ``q_fallback`` when CasADi raises
+    (evaluation errors, NaN in functions) or the answer is not finite."""
+    try:
+        res = solver(**args)
+        stats = solver.stats()
+        q = np.array(res["x"], dtype=float).reshape(-1)[:n]
+        status = str(stats.get("return_status", "unknown"))
+        iterations = int(stats.get("iter_count", 0))
+    except RuntimeError as exc:
+        detail = str(exc).splitlines()[0] if str(exc) else "error"
+        return q_fallback, "exception", detail, 0
+    if not np.all(np.isfinite(q)):
+        return q_fallback, "exception", "non-finite answer", iterations
+    return q, status, status, iterations
 
 
 def _vector(v, n: int, name: str) -> np.ndarray:

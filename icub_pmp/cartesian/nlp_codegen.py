@@ -1,4 +1,5 @@
-"""Compile a CasADi NLP to C once and reuse it: ``compiled_nlpsol``.
+"""Compile CasADi NLPs and functions to C once and reuse them: ``compiled_nlpsol``,
+``compiled_function``.
 
 CasADi's documented code-generation route: ``solver.generate_dependencies('nlp.c')`` writes the
 objective, constraints, their derivatives and the exact Lagrangian Hessian as C; gcc turns it
@@ -20,7 +21,7 @@ from typing import Callable
 
 import casadi as ca
 
-__all__ = ["compiled_nlpsol", "cache_dir"]
+__all__ = ["compiled_function", "compiled_nlpsol", "cache_dir"]
 
 _LOG = logging.getLogger(__name__)
 _CFLAGS = ("-O2", "-fPIC", "-shared")
@@ -49,6 +50,15 @@ def compiled_nlpsol(
     if lib is None:
         return [plain] + [ca.nlpsol(name, "ipopt", nlp, o) for o in more_opts], False
     return [ca.nlpsol(name, "ipopt", str(lib), o) for o in (opts, *more_opts)], True
+
+
+def compiled_function(fn: ca.Function) -> tuple[ca.Function, bool]:
+    """``fn`` as compiled C (``ca.external`` of the cached library) when gcc is available;
+    otherwise ``fn`` itself (CasADi's virtual machine). Returns ``(function, compiled)``."""
+    lib = _compile(fn.name(), lambda c_name: fn.generate(c_name))
+    if lib is None:
+        return fn, False
+    return ca.external(fn.name(), str(lib)), True
 
 
 def _compile(name: str, write_c: Callable[[str], object]) -> Path | None:
