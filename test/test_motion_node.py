@@ -180,6 +180,8 @@ def test_node_with_simulator(segmenter_node, ros_probe, ros_domain_id):
 
         bad = _set_params(ros_probe, "motion_segmenter", adj_nodes_thres=9)
         assert not bad[0].successful and "adj_nodes_thres" in bad[0].reason
+        bad = _set_params(ros_probe, "motion_segmenter", accum_decay=1.0)
+        assert not bad[0].successful and "accum_decay" in bad[0].reason
         ok = _set_params(ros_probe, "motion_segmenter", adj_nodes_thres=2, confirm_frames=1,
                          blob_min_size=4)
         assert all(r.successful for r in ok), [r.reason for r in ok]
