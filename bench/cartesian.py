@@ -11,7 +11,9 @@ constraints on, targets drawn from configurations that meet them (the poses the 
 take). Second run ("free"): constraints off, every uniform draw kept. Success = position error
 <= 1 mm (and orientation error <= 1 deg for pose targets). The same targets go to a
 damped-least-squares solver, to pink (differential IK on pinocchio, QP solver daqp) and to the
-PMP planner of icub_pmp.pmp (a subset: it relaxes a dynamical system, much slower).
+PMP planner of icub_pmp.pmp (a subset: it relaxes a dynamical system, much slower). The
+solver runs as configured (IPOPT warm-started from the compiled seed, IkSeed); the same solver
+without the seed (IPOPT from rest, "ipopt_noseed") runs in the same process as the baseline.
 
 Jerk part (Sect. 4.1, Table 2 comparison): the 7-DoF right arm reaches pose targets from rest
 with (a) the multi-referential min-jerk generator (T = 2 s), (b) the same scheme with VITE
@@ -308,12 +310,17 @@ def main(argv=None) -> int:
     pink_solver = PinkSolver(model)
 
     iterations: dict[str, list[int]] = {"pos": [], "pose": []}
+    seeded: dict[str, list[bool]] = {"pos": [], "pose": []}
+    # same-process baseline: IPOPT from the rest posture without the warm-start seed
+    ik_noseed = IkSolver(model, IkConfig(seed_warm_start=False))
+    ik_noseed.problem(CHAIN)
 
     def ipopt(solver, record=False):
         def solve(T, ori):
             sol = solver.solve(CHAIN, T.translation, T.rotation if ori else None)
             if record:
                 iterations["pose" if ori else "pos"].append(sol.iterations)
+                seeded["pose" if ori else "pos"].append(sol.seeded)
             return sol.q
 
         return solve
@@ -324,7 +331,8 @@ def main(argv=None) -> int:
     def pink_fn(T, ori):
         return pink_solver.solve(T, ori)[0]
 
-    methods = {"ipopt": (ipopt(ik, record=True), n), "dls": (dls_fn, n), "pink": (pink_fn, n)}
+    methods = {"ipopt": (ipopt(ik, record=True), n), "ipopt_noseed": (ipopt(ik_noseed), n),
+               "dls": (dls_fn, n), "pink": (pink_fn, n)}
     pmp_note = None
     try:
         from icub_pmp.pmp import PmpPlanner, ReachGoal
@@ -348,7 +356,7 @@ def main(argv=None) -> int:
     # warm-up (first calls load libraries), not timed in the results
     for fn, _ in methods.values():
         fn(targets[0], False)
-    for v in iterations.values():
+    for v in (*iterations.values(), *seeded.values()):
         v.clear()  # drop the warm-up call
     res = {k: summarise(v) for k, v in run_methods(model, targets, methods).items()}
     its = {k: np.array(v) for k, v in iterations.items()}
@@ -384,7 +392,7 @@ def main(argv=None) -> int:
         print(f"== {label} ({n} targets from rest)")
         for name, modes in block.items():
             for mode, s in modes.items():
-                print(f"  {name:6s} {mode:4s} n={s['n']:4d} success {s['success_rate']:.4f}  "
+                print(f"  {name:12s} {mode:4s} n={s['n']:4d} success {s['success_rate']:.4f}  "
                       f"pos {s['pos_err_mm_median']:.3f}/{s['pos_err_mm_p95']:.3f} mm  "
                       f"ori {s['ori_err_deg_median']:.3f}/{s['ori_err_deg_p95']:.3f} deg  "
                       f"time {s['ms_median']:.2f}/{s['ms_p95']:.2f} ms "
@@ -410,6 +418,14 @@ def main(argv=None) -> int:
         "ipopt_iter_p95": float(np.percentile(its["pos"], 95)),
         "ipopt_iter_median_pose": float(np.median(its["pose"])),
         "ipopt_iter_p95_pose": float(np.percentile(its["pose"], 95)),
+        "seed_used_rate_pos": float(np.mean(seeded["pos"])),
+        "seed_used_rate_pose": float(np.mean(seeded["pose"])),
+        "noseed_solve_ms_median": res["ipopt_noseed"]["pos"]["ms_median"],
+        "noseed_solve_cpu_ms_median": res["ipopt_noseed"]["pos"]["cpu_ms_median"],
+        "noseed_solve_cpu_ms_p95": res["ipopt_noseed"]["pos"]["cpu_ms_p95"],
+        "noseed_solve_cpu_ms_median_pose": res["ipopt_noseed"]["pose"]["cpu_ms_median"],
+        "noseed_success_rate_pos": res["ipopt_noseed"]["pos"]["success_rate"],
+        "noseed_success_rate_pose": res["ipopt_noseed"]["pose"]["success_rate"],
         "pos_err_mm_p95": r["pos"]["pos_err_mm_p95"],
         "ori_err_deg_p95_pose": r["pose"]["ori_err_deg_p95"],
         "joint_limit_violations": r["pos"]["joint_limit_violations"]

@@ -30,6 +30,7 @@ from icub_pmp.kinematics.robot_model import IcubModel
 __all__ = ["IkSolver", "rotation_angle"]
 
 _CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+_VIOLATION_OK = 1e-6  # largest accepted violation of limits / linear constraints [rad]
 
 
 def rotation_angle(R_a: np.ndarray, R_b: np.ndarray) -> float:
@@ -172,7 +173,11 @@ class IkSolver:
             return False, x0, "seed_missed", "seed missed", 0
         q, status, detail, its = _run(prob.warm_solver, prob.chain.n, x0, x0=xs, lam_x0=lam_x,
                                       lam_g0=lam_g, **bounds)
-        return status in _CONVERGED, q, status, detail, its
+        # the seed ignores the linear (shoulder) and extra constraints: IPOPT restores them,
+        # but only to its constr_viol_tol; keep the answer only if they hold as tightly as
+        # IkSolution.success requires (from the start joints IPOPT stays inside them)
+        ok = status in _CONVERGED and prob.linear_violation(q, bounds["p"]) <= _VIOLATION_OK
+        return ok, q, status, detail, its
 
     def _evaluate(self, prob, q, p, x_d, R_d, q_fixed, eps, dt, iterations, status, detail,
                   seeded=False):
@@ -181,7 +186,7 @@ class IkSolver:
         oerr = math.nan if R_d is None else rotation_angle(R_d, rot)
         viol = prob.linear_violation(q, p)
         tol_pos = math.sqrt(eps + self.config.constraint_tolerance)
-        feasible = perr <= tol_pos * (1 + 1e-9) and viol <= 1e-6
+        feasible = perr <= tol_pos * (1 + 1e-9) and viol <= _VIOLATION_OK
         converged = status in _CONVERGED
         if feasible:
             msg = f"position error {perr * 1e3:.3f} mm"
