@@ -34,7 +34,9 @@ class IkConfig(ConfigBase):
         max_solve_time: wall-clock bound of one IPOPT solve [s] (``max_wall_time``). A solve
             takes milliseconds; the bound only stops pathological cases (iKin: 0.05-0.5 s on
             a broken install) and is loose enough that a loaded machine (solves 4-6 times
-            slower, measured here) does not change the answers.
+            slower, measured here) does not change the answers. It bounds each IPOPT call:
+            with ``seed_warm_start`` a solve makes at most two (warm start, then fallback)
+            after the seed, which is a fixed number of iterations (~0.3 ms).
         codegen: compile the NLP functions to C with gcc (cached on disk) for speed.
         seed_warm_start: start IPOPT warm (primal point and multipliers) from a compiled
             fixed-iteration Newton seed on eq 11 (:class:`IkSeed`) run from the start joints;

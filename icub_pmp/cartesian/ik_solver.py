@@ -79,7 +79,8 @@ class IkSolver:
         self._q_rest_full = self.model.posture(config.rest_posture)
 
     def problem(self, chain: str) -> IkProblem:
-        """The (cached) NLP of ``chain``; builds it on first use."""
+        """The (cached) NLP of ``chain``; builds it on first use (and its seed when
+        ``seed_warm_start`` is on, so that a prebuilt chain never compiles during a request)."""
         if chain not in CHAIN_NAMES:
             raise UnknownName("chain", chain, CHAIN_NAMES)
         if chain not in self._problems:
@@ -87,7 +88,10 @@ class IkSolver:
             self._problems[chain] = IkProblem(
                 self.model, kc, self.config, self.constraints.get(chain, ())
             )
-        return self._problems[chain]
+        prob = self._problems[chain]
+        if self.config.seed_warm_start:
+            _ = prob.seed  # built (and compiled) on first access
+        return prob
 
     def rest_weights(self, chain: KinematicChain) -> np.ndarray:
         """beta * diag(W) over the chain's optimised joints."""
