@@ -87,7 +87,6 @@ class FtDynamicsModel:
         for _ in range(self.model.njoints):
             self._fext.append(pin.Force.Zero())
         self._ft_ids = [(h, j) for h, j in self._ft_joint.items()]
-        self._shift = pin.SE3.Identity()  # translation-only frame at the hand origin
         # joint-local placement of each hand frame (to apply hand wrenches as f_ext)
         self._hand_in_joint = {
             h: self.model.frames[f].placement for h, f in self._hand_frame.items()
@@ -95,16 +94,10 @@ class FtDynamicsModel:
         self._hand_joint = {
             h: self.model.frames[f].parentJoint for h, f in self._hand_frame.items()
         }
-        # per hand: FT joint, hand's parent joint, joint frame -> hand frame, hand origin in
-        # the joint frame (the constants of torques_with_sensor_excess)
-        self._hand_chain = [
-            (h, self._ft_joint[h], self._hand_joint[h], self._hand_in_joint[h].inverse(),
-             self._hand_in_joint[h].translation.copy())
-            for h in HANDS
-        ]
         self._fext_hands = pin.StdVec_Force()
         for _ in range(self.model.njoints):
             self._fext_hands.append(pin.Force.Zero())
+        self._passes = [_HandPass.create(h, self) for h in HANDS]
         self.lower = np.array(self.model.lowerPositionLimit[self._act])
         self.upper = np.array(self.model.upperPositionLimit[self._act])
 
@@ -184,10 +177,9 @@ class FtDynamicsModel:
         self._v[act] = v
         self._a[act] = a
         pin.rnea(self.model, self.data, self._q, self._v, self._a)
-        f = self.data.f
         out = {}
-        for h, j in self._ft_ids:
-            out[h] = f[j].vector.copy()
+        for hp in self._passes:
+            out[hp.hand] = hp.sensor_wrench.copy()
         pin.forwardKinematics(self.model, self.data, self._q)
         return out
 
@@ -200,18 +192,18 @@ class FtDynamicsModel:
         distal arm. Returns the joint torques (nq,) with those external wrenches applied at the
         hands (RNEA), and the wrenches {hand: (6,)} about the hand origin in hand-frame axes
         and in root_link axes. Every hand in :data:`HANDS` must be given."""
-        o_mi = self.data.oMi
         fext = self._fext_hands  # both hand entries are overwritten on every call
-        shift = self._shift
+        model, data = self.model, self.data
         ext_hand, ext_root = {}, {}
-        for h, j_ft, j_hand, joint_in_hand, hand_origin in self._hand_chain:
-            f_root = o_mi[j_ft].act(pin.Force(excess[h]))  # about the root origin
-            o_j = o_mi[j_hand]
-            f_joint = o_j.actInv(f_root)  # RNEA takes f_ext in the joint's local frame
-            fext[j_hand] = f_joint
-            ext_hand[h] = joint_in_hand.act(f_joint).vector
-            shift.translation = o_j.act(hand_origin)  # hand origin in root_link
-            ext_root[h] = shift.actInv(f_root).vector
+        for hp in self._passes:
+            hp.excess_vector[:] = excess[hp.hand]
+            f_root = hp.sensor_pose.act(hp.excess)  # in root_link, about the root origin
+            f_joint = hp.joint_pose.actInv(f_root)  # RNEA takes f_ext in the joint's frame
+            fext[hp.joint] = f_joint
+            ext_hand[hp.hand] = hp.joint_in_hand.act(f_joint).vector
+            pin.updateFramePlacement(model, data, hp.frame)  # the hand frame in root_link
+            hp.shift_translation[:] = hp.hand_translation
+            ext_root[hp.hand] = hp.shift.actInv(f_root).vector
         tau = pin.rnea(self.model, self.data, self._q, self._v, self._a, fext)
         return tau[self._act], ext_hand, ext_root
 
@@ -282,3 +274,33 @@ def _prepare_urdf(xml: str, link_mass_scale: dict[str, float]) -> tuple[str, dic
         m = lk.find("inertial/mass")
         masses[name] = float(m.get("value")) if m is not None else 0.0
     return ET.tostring(root, encoding="unicode"), masses
+
+
+class _HandPass:
+    """Per hand, what the estimator's two passes touch at 1 kHz, bound once: numpy views into
+    pinocchio's data (the FT joint's RNEA wrench, the hand joint's placement) and preallocated
+    objects written in place. Converting numpy <-> pinocchio objects costs a few microseconds
+    per call right after a physics step; reading and writing these views costs a numpy copy.
+    (The views stay valid: ``data`` is never reallocated.) Side effect of the second pass:
+    ``data.oMf`` of the hand frames is updated."""
+
+    __slots__ = ("hand", "joint", "frame", "sensor_wrench", "sensor_pose", "joint_pose",
+                 "hand_translation", "joint_in_hand", "excess", "excess_vector", "shift",
+                 "shift_translation")
+
+    @classmethod
+    def create(cls, hand: str, m: "FtDynamicsModel") -> "_HandPass":
+        hp = cls()
+        hp.hand = hand
+        j_ft, hp.joint = m._ft_joint[hand], m._hand_joint[hand]
+        hp.sensor_wrench = m.data.f[j_ft].vector  # view: the wrench through the sensor
+        hp.sensor_pose = m.data.oMi[j_ft]  # reference: the sensor frame in root_link
+        hp.joint_pose = m.data.oMi[hp.joint]  # reference: the hand's parent joint frame
+        hp.frame = m._hand_frame[hand]
+        hp.hand_translation = m.data.oMf[hp.frame].translation  # view: hand origin in root
+        hp.joint_in_hand = m._hand_in_joint[hand].inverse()
+        hp.excess = pin.Force.Zero()
+        hp.excess_vector = hp.excess.vector  # writable view
+        hp.shift = pin.SE3.Identity()  # root_link axes at the hand origin
+        hp.shift_translation = hp.shift.translation  # writable view
+        return hp
