@@ -20,8 +20,9 @@ multiplier of c. Each iteration solves the (n+3) x (n+3) KKT system
     [H   J^T] [dq     ]   [-grad f]
     [J   0  ] [lambda+] = [-c     ],     J = dc/dq,
 
-with joints at a bound that the step would push further out held fixed (their row replaced by
-dq_i = 0), the step scaled to at most ``max_step`` [rad] per joint and the result clipped to
+with the joints within 1e-6 rad of a limit held (their row replaced by dq_i = 0) unless their
+multiplier says the Lagrangian decreases into the interior (one active-set update per
+iteration), the step scaled to at most ``max_step`` [rad] per joint and the result clipped to
 the limits. The first ``n_gauss`` iterations use the Gauss-Newton Hessian of f (orientation
 residual ``R_d - R(q)``: ``w_ori J_r^T J_r`` + the rest term's diagonal, positive semi-definite)
 + damping and s = 0: robust far from the target. The others use the exact Hessian of the
@@ -29,9 +30,10 @@ Lagrangian + damping with s put on the ball: quadratic convergence near a KKT po
 method also converges to saddles and maxima (e.g. the hand turned by 180 deg, where the
 orientation term is stationary), so the seed's point is used only if it passes a second-order
 check (computed in the same generated C).
-The seed ignores iKin's linear shoulder constraints and any extra constraints: IPOPT handles
-them; :class:`IkSolver` falls back to IPOPT from the usual start when the seed's point is not
-feasible for ALL of eq 11's constraints or the warm-started IPOPT does not converge.
+The seed ignores iKin's linear shoulder constraints and any extra constraints: the
+warm-started IPOPT handles them; :class:`IkSolver` falls back to IPOPT from the usual start
+when the seed misses the target or fails the check, or the warm-started IPOPT does not
+converge or leaves a linear constraint violated.
 """
 
 from __future__ import annotations
@@ -104,11 +106,15 @@ class IkSeed:
             sol = ca.solve(K, ca.vertcat(-D @ grad_f, -c))
             return sol[:n], sol[n:]
 
-        at_lb = q <= lb + 1e-12
-        at_ub = q >= ub - 1e-12
-        dq0, _ = kkt_step(ca.SX.ones(n))
-        fixed = ca.logic_or(ca.logic_and(at_lb, dq0 < 0), ca.logic_and(at_ub, dq0 > 0))
-        dq, lam_new = kkt_step(1 - fixed)
+        at_lb = q <= lb + _AT_BOUND
+        at_ub = q >= ub - _AT_BOUND
+        # active set on the limits: hold every joint at a limit, then release those whose
+        # multiplier has the wrong sign (the model's Lagrangian decreases into the interior)
+        held = ca.logic_or(at_lb, at_ub)
+        dq1, lam1 = kkt_step(1 - held)
+        grad_l = H @ dq1 + grad_f + J.T @ lam1
+        release = ca.logic_or(ca.logic_and(at_lb, grad_l < 0), ca.logic_and(at_ub, grad_l > 0))
+        dq, lam_new = kkt_step(1 - ca.logic_and(held, ca.logic_not(release)))
         scale = ca.fmin(1.0, max_step / (ca.mmax(ca.fabs(dq)) + 1e-30))
         q_new = ca.fmin(ca.fmax(q + scale * dq, lb), ub)
         step = ca.Function(
@@ -146,7 +152,7 @@ class IkSeed:
         c = x_d - problem.fk_position - s
         grad_l = ca.gradient(problem.f + ca.dot(lam, c), q)
         lb, ub = ca.DM(problem.lbx), ca.DM(problem.ubx)
-        at_bound = ca.logic_or(q <= lb + 1e-12, q >= ub - 1e-12)
+        at_bound = ca.logic_or(q <= lb + _AT_BOUND, q >= ub - _AT_BOUND)
         lam_x_q = -grad_l * at_bound
         n_rest = problem.g.numel() - 4
         lam_g = ca.vertcat(lam_g1, lam_g2, ca.SX.zeros(n_rest))
@@ -183,6 +189,10 @@ class IkSeed:
 
 
 _RHO = 1e4  # [1/m^2] weight of J^T J in the second-order check
+# a joint this close to a limit counts as at the limit [rad] (IPOPT's answers, the node's warm
+# starts, stay ~1e-8 inside: treated as free, the Newton step pushes them out and the clipping
+# makes the step inconsistent)
+_AT_BOUND = 1e-6
 _PIVOT_TOL = 1e-9  # smallest accepted pivot (semi-definite up to round-off)
 
 
