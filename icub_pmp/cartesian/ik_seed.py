@@ -38,7 +38,6 @@ converge or leaves a linear constraint violated.
 
 from __future__ import annotations
 
-import logging
 import math
 
 import casadi as ca
@@ -48,8 +47,6 @@ from icub_pmp.cartesian.ik_problem import POSITION_SCALE, SLACK_SCALE
 from icub_pmp.cartesian.nlp_codegen import compiled_function
 
 __all__ = ["IkSeed"]
-
-_LOG = logging.getLogger(__name__)
 
 
 class IkSeed:
@@ -64,8 +61,10 @@ class IkSeed:
         codegen: compile to C with gcc (cached); otherwise CasADi's virtual machine.
 
     Call :meth:`__call__` with ``q0`` (n,) [rad], the parameter vector ``p`` and epsilon
-    [m^2]; it returns ``(x0, lam_x0, lam_g0, position_error)`` for the lifted NLP (x = [q; s],
-    multipliers in CasADi's convention, ``lam_g0`` over the NLP's constraints in order).
+    [m^2]; it returns ``(x0, lam_x0, lam_g0, position_error, minimum)``: the warm start of the
+    lifted NLP (x = [q; s], multipliers in CasADi's convention, ``lam_g0`` over the NLP's
+    constraints in order), the hand's distance to the target [m] and the second-order check.
+    It is a warm start only: :class:`IkSolver` returns IPOPT's answer.
     """
 
     def __init__(
