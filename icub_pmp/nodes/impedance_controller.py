@@ -27,10 +27,10 @@ both are logged. All :class:`ImpedanceControllerConfig` parameters can change at
 
 from __future__ import annotations
 
-import array
 import time
 
 import numpy as np
+from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
@@ -49,6 +49,11 @@ from icub_pmp.nodes.conversions import (
     trajectory_to_arrays,
 )
 from icub_pmp.nodes.node_runner import spin_node
+from icub_pmp.nodes.raw_messages import (
+    RawJointStateReader,
+    RawJointStateWriter,
+    read_joint_state,
+)
 
 __all__ = ["ImpedanceControllerNode", "main"]
 
@@ -85,12 +90,16 @@ class ImpedanceControllerNode(Node):
         sd = qos_profile_sensor_data
         self.pub_effort = self.create_publisher(JointState, "/effort_command", sd)
         self.pub_state = self.create_publisher(JointState, "/impedance_controller/state", sd)
-        self._effort = JointState()
-        self._effort.name = self.names
+        self._effort_writer = RawJointStateWriter(list(self.names))
         self._state = JointState()
         self._state.name = self.names
-        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd)
-        self.create_subscription(JointState, "/estimated_joint_torques", self._on_estimate, sd)
+        # the two 1 kHz inputs are read from their bytes (raw_messages), not deserialised
+        self._js_reader = RawJointStateReader()
+        self._est_reader = RawJointStateReader()
+        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd,
+                                 raw=True)
+        self.create_subscription(JointState, "/estimated_joint_torques", self._on_estimate, sd,
+                                 raw=True)
         self.create_subscription(JointTrajectory, "/joint_trajectory", self._on_trajectory,
                                  _TRAJ_QOS)
         self.create_subscription(JointState, "/impedance_controller/velocity_command",
@@ -140,8 +149,9 @@ class ImpedanceControllerNode(Node):
         self.dropped += 1
         self.get_logger().warning(text, throttle_duration_sec=2.0)
 
-    def _on_joint_state(self, msg: JointState) -> None:
+    def _on_joint_state(self, data: bytes) -> None:
         try:
+            msg = read_joint_state(self._js_reader, data)
             if msg.name != self._js_names:
                 self._js_idx = None
                 self._js_names = list(msg.name)
@@ -152,8 +162,9 @@ class ImpedanceControllerNode(Node):
             self._js_names = None
             self._warn(f"/joint_states dropped: {exc}")
             return
-        stamp = msg.header.stamp
-        ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+        ns = msg.stamp_ns
+        sec, nanosec = divmod(ns, 1_000_000_000)
+        stamp = Time(sec=sec, nanosec=nanosec)
         cfg = self.controller.config
         if not cfg.lockstep:
             self._latest = (ns * 1e-9, q, v)
@@ -165,17 +176,17 @@ class ImpedanceControllerNode(Node):
             return
         self._step(ns * 1e-9, q, v, stamp)
 
-    def _on_estimate(self, msg: JointState) -> None:
+    def _on_estimate(self, data: bytes) -> None:
         try:
-            tau = np.asarray(msg.effort, dtype=float)
+            msg = read_joint_state(self._est_reader, data)
+            tau = msg.effort
             if tau.shape != (len(msg.name),):
                 raise InvalidInput(f"effort has {tau.size} values for {len(msg.name)} names")
-            t = time_to_sec(msg.header.stamp)
-            self.controller.set_estimate(t, msg.name, tau)
+            ns = msg.stamp_ns
+            self.controller.set_estimate(ns * 1e-9, msg.name, tau)
         except IcubPmpError as exc:
             self._warn(f"/estimated_joint_torques dropped: {exc}")
             return
-        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         self._est_ns = max(self._est_ns, ns)
         p = self._pending
         if p is not None and p[0] <= self._est_ns:
@@ -257,10 +268,9 @@ class ImpedanceControllerNode(Node):
             return
         self._t_last = t
         self.steps += 1
-        m = self._effort
-        m.header.stamp = stamp
-        m.effort = array.array("d", out.tau.tobytes())
-        self.pub_effort.publish(m)
+        # serialised directly (raw_messages): the names are encoded once
+        self.pub_effort.publish(self._effort_writer.write(
+            stamp.sec * 1_000_000_000 + stamp.nanosec, effort=out.tau))
         if was_safe:
             self.get_logger().info("joint states are back: holding the measured posture")
         if out.status != self._status:

@@ -37,8 +37,8 @@ subscribed goes unanswered: the loop steps on after ``lockstep_timeout``.
 
 from __future__ import annotations
 
-import array
 import collections
+import math
 import os
 import signal
 import threading
@@ -58,11 +58,17 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 from std_srvs.srv import SetBool
 
 from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
-from icub_pmp.errors import IcubPmpError
+from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.nodes.conversions import (
     pose_to_arrays,
     validate_joint_state,
     wrench_to_array,
+)
+from icub_pmp.nodes.raw_messages import (
+    RawJointState,
+    RawJointStateReader,
+    RawJointStateWriter,
+    read_joint_state,
 )
 from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
 from icub_sim_bridge.simulator import FT_SENSORS
@@ -80,12 +86,20 @@ def _set_stamp(stamp: Any, ns: int) -> None:
     stamp.nanosec = ns % 1_000_000_000
 
 
-def _doubles(a: np.ndarray) -> array.array:
-    return array.array("d", np.ascontiguousarray(a, dtype=float).tobytes())
-
-
 def _set_vec(v: Any, a: np.ndarray) -> None:
     v.x, v.y, v.z = float(a[0]), float(a[1]), float(a[2])
+
+
+def _check_command_values(msg: RawJointState) -> None:
+    """The value checks of validate_joint_state for a command whose names were validated:
+    effort as long as the names and finite, position and velocity empty or likewise."""
+    n = len(msg.name)
+    for field in ("position", "velocity", "effort"):
+        values = getattr(msg, field)
+        if len(values) != n and (field == "effort" or len(values)):
+            raise InvalidInput(f"JointState.{field} has {len(values)} values for {n} names")
+        if len(values) and not math.isfinite(values @ values):
+            raise InvalidInput(f"JointState.{field} contains NaN or infinite values")
 
 
 class _Command:
@@ -127,8 +141,7 @@ class SimBridge(Node):
                         for o in self.sim.object_names}
         # --- reusable messages (filled in place every step)
         self._clock_msg = Clock()
-        self._js = JointState()
-        self._js.name = list(self._names)
+        self._js_writer = RawJointStateWriter(list(self._names))
         self._ft_msgs = {}
         for n in FT_SENSORS:
             m = WrenchStamped()
@@ -162,7 +175,11 @@ class SimBridge(Node):
         self.rejected = 0
         self.timeouts = 0
         self.paused = self.config.start_paused
-        self.create_subscription(JointState, "/effort_command", self._on_effort, sd)
+        # read from its bytes (raw_messages): the 1 kHz input of the lockstep loop
+        self._effort_reader = RawJointStateReader()
+        self._effort_names: list[str] | None = None  # names of the last valid command
+        self._effort_idx = np.zeros(0, dtype=int)
+        self.create_subscription(JointState, "/effort_command", self._on_effort, sd, raw=True)
         self.create_service(ResetSim, "/sim/reset", self._srv_reset)
         self.create_service(SetObjectPose, "/sim/set_object_pose", self._srv_set_object_pose)
         self.create_service(SetBool, "/sim/set_paused", self._srv_set_paused)
@@ -239,12 +256,24 @@ class SimBridge(Node):
             self.pub_info[side].publish(info)
 
     # ------------------------------------------------------------------ effort commands
-    def _on_effort(self, msg: JointState) -> None:
-        stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+    def _on_effort(self, data: bytes) -> None:
         try:
-            validate_joint_state(msg, required=("effort",), valid_names=self._valid_names)
-            idx = self.sim.indices(msg.name)
-            tau = np.asarray(msg.effort, dtype=float)
+            msg = read_joint_state(self._effort_reader, data)
+        except IcubPmpError as exc:
+            self.rejected += 1
+            self.get_logger().warning(f"/effort_command rejected ({self.rejected} so far): "
+                                      f"{exc}", throttle_duration_sec=1.0)
+            return
+        stamp_ns = msg.stamp_ns
+        try:
+            if msg.name is self._effort_names:  # same names as the last valid command
+                _check_command_values(msg)
+                idx = self._effort_idx
+            else:
+                validate_joint_state(msg, required=("effort",), valid_names=self._valid_names)
+                idx = self.sim.indices(msg.name)
+                self._effort_names, self._effort_idx = msg.name, idx
+            tau = msg.effort
         except IcubPmpError as exc:
             self.rejected += 1
             self.get_logger().warning(f"/effort_command rejected ({self.rejected} so far): "
@@ -345,12 +374,8 @@ class SimBridge(Node):
         _set_stamp(self._clock_msg.clock, ns)
         self.pub_clock.publish(self._clock_msg)
         st = sim.joint_state()
-        js = self._js
-        _set_stamp(js.header.stamp, ns)
-        js.position = _doubles(st.position)
-        js.velocity = _doubles(st.velocity)
-        js.effort = _doubles(st.effort)
-        self.pub_js.publish(js)
+        # serialised directly (raw_messages): the names are encoded once, not per message
+        self.pub_js.publish(self._js_writer.write(ns, st.position, st.velocity, st.effort))
         ft = sim.ft_all()
         for k, n in enumerate(FT_SENSORS):
             if not self._active(self.pub_ft[n]):

@@ -29,9 +29,8 @@ state is lost).
 
 from __future__ import annotations
 
-import array
-
 import numpy as np
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
@@ -51,6 +50,11 @@ from icub_pmp.nodes.conversions import (
     wrench_to_array,
 )
 from icub_pmp.nodes.node_runner import spin_node
+from icub_pmp.nodes.raw_messages import (
+    RawJointStateReader,
+    RawJointStateWriter,
+    raw_wrench_stamped,
+)
 
 __all__ = ["WrenchEstimatorNode", "main"]
 
@@ -75,6 +79,7 @@ class WrenchEstimatorNode(Node):
         self.estimator = WrenchEstimator(self.config)
         self.names = list(self.estimator.joint_names)
         self._cached_names: list[str] | None = None
+        self._js_reader = RawJointStateReader()  # joint states read from their bytes
         self._idx: np.ndarray | None = None
         self._js: dict[int, JointState] = {}
         self._ft: dict[str, dict[int, np.ndarray]] = {h: {} for h in HANDS}
@@ -97,8 +102,8 @@ class WrenchEstimatorNode(Node):
         self.pub_pred = {h: self.create_publisher(
             WrenchStamped, f"/wrench_estimator/predicted_ft/{_FT_TOPIC[h]}", sd) for h in HANDS}
         # reusable messages
-        self._tau_msg = JointState()
-        self._tau_msg.name = self.names
+        self._tau_writer = RawJointStateWriter(list(self.names))
+        self._stamp_msg = Time()  # the stamp of the decimated outputs
         self._ext_msg = {h: WrenchStamped() for h in HANDS}
         self._ext_root_msg = {h: WrenchStamped() for h in HANDS}
         self._pred_msg = {h: WrenchStamped() for h in HANDS}
@@ -221,6 +226,15 @@ class WrenchEstimatorNode(Node):
         self._process(ns, msg, ft)
 
     # ------------------------------------------------------------------ processing
+    @staticmethod
+    def _deserialize(js_data: bytes, ft_data: dict[str, bytes]
+                     ) -> tuple[JointState, dict[str, np.ndarray]]:
+        """The general path (e.g. big-endian data): rclpy's deserialiser."""
+        msg = deserialize_message(js_data, JointState)
+        ft = {h: wrench_to_array(deserialize_message(ft_data[h], WrenchStamped).wrench)
+              for h in HANDS}
+        return msg, ft
+
     def _process(self, ns: int, js_data: bytes, ft_data: dict[str, bytes]) -> None:
         """Deserialise and process one synchronised sample (one in ``sample_every``)."""
         if ns <= self._last_ns:
@@ -230,13 +244,14 @@ class WrenchEstimatorNode(Node):
             self._last_ns = ns
             return
         try:
-            msg = deserialize_message(js_data, JointState)
-            ft = {}
+            try:  # the numbers straight from the bytes (raw_messages), else deserialise
+                msg = self._js_reader.read(js_data)
+                ft = {h: raw_wrench_stamped(ft_data[h])[1] for h in HANDS}
+            except InvalidInput:
+                msg, ft = self._deserialize(js_data, ft_data)
             for h in HANDS:
-                w = wrench_to_array(deserialize_message(ft_data[h], WrenchStamped).wrench)
-                if not np.all(np.isfinite(w)):
+                if not np.all(np.isfinite(ft[h])):
                     raise InvalidInput(f"/ft/{_FT_TOPIC[h]}: NaN or infinite wrench")
-                ft[h] = w
         except IcubPmpError as exc:
             self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
             return
@@ -258,13 +273,12 @@ class WrenchEstimatorNode(Node):
             return
         self._last_ns = ns
         self.samples += 1
-        stamp = msg.header.stamp
-        m = self._tau_msg
-        m.header.stamp = stamp
-        m.effort = array.array("d", est.tau.tobytes())
-        self.pub_tau.publish(m)
+        # serialised directly (raw_messages): the names are encoded once
+        self.pub_tau.publish(self._tau_writer.write(ns, effort=est.tau))
         if self.samples % self.config.publish_every:
             return
+        stamp = self._stamp_msg
+        stamp.sec, stamp.nanosec = divmod(ns, 1_000_000_000)
         for h in HANDS:
             e = self._ext_msg[h]
             e.header.stamp = stamp
