@@ -19,6 +19,9 @@ source "$ROOT/install/setup.bash"
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-42}"
 export RMW_IMPLEMENTATION="${RMW_IMPLEMENTATION:-rmw_fastrtps_cpp}"
+# deeper Fast DDS shared-memory buffers (see config/fastdds.xml): no 1 kHz message lost by a
+# bag recorder that waits for the CPU
+export FASTRTPS_DEFAULT_PROFILES_FILE="${FASTRTPS_DEFAULT_PROFILES_FILE:-$ROOT/config/fastdds.xml}"
 export MUJOCO_GL="${MUJOCO_GL:-egl}"
 export PYTHONPATH="$ROOT${PYTHONPATH:+:$PYTHONPATH}"
 export ICUB_PMP_ROOT="$ROOT"
