@@ -20,6 +20,7 @@ from icub_pmp.cartesian.ik_solver import _rotation, _vector, rotation_angle
 from icub_pmp.cartesian.kinematic_chain import KinematicChain
 from icub_pmp.config import ConfigBase
 from icub_pmp.errors import ConfigError
+from icub_pmp.kinematics.dls_step import damped_least_squares_step
 from icub_pmp.kinematics.robot_model import IcubModel
 
 __all__ = ["DlsConfig", "DlsSolver"]
@@ -76,7 +77,6 @@ class DlsSolver:
         lo, hi = m.lower[idx], m.upper[idx]
         q[idx] = np.clip(q[idx], lo, hi)
         rows = 3 if R_d is None else 6
-        lam2 = cfg.damping**2 * np.eye(rows)
         t0 = time.perf_counter()
         status = "Maximum_Iterations_Exceeded"
         it = 0
@@ -94,10 +94,7 @@ class DlsSolver:
                 break
             if it == cfg.max_iter:
                 break
-            dq = J.T @ np.linalg.solve(J @ J.T + lam2, e)
-            norm = float(np.linalg.norm(dq))
-            if norm > cfg.max_step:
-                dq *= cfg.max_step / norm
+            dq = damped_least_squares_step(J, e, cfg.damping, cfg.max_step)
             q[idx] = np.clip(q[idx] + dq, lo, hi)
         dt = time.perf_counter() - t0
         pose = m.frame_pose(q, fid)

@@ -17,6 +17,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 
 from icub_pmp.errors import InvalidInput
+from icub_pmp.kinematics.dls_step import damped_least_squares_step
 from icub_pmp.pmp.jacobian_provider import JacobianProvider
 
 __all__ = ["DlsSolver", "DlsResult"]
@@ -76,7 +77,6 @@ class DlsSolver:
         hi = self.provider.upper[idx] if upper is None else np.asarray(upper, dtype=float)
         xt = np.asarray(targets, dtype=float).reshape(-1)
         k = len(self.frames)
-        damp = self.damping**2 * np.eye(3 * k)
         best, best_it, it = np.inf, 0, 0
         while True:
             kin = self.provider.kinematics(q, self.frames)
@@ -91,9 +91,6 @@ class DlsSolver:
                 break
             it += 1
             g = kin.jacobians[:, :3, :][:, :, idx].reshape(3 * k, len(idx))
-            dq = g.T @ np.linalg.solve(g @ g.T + damp, e)
-            norm = float(np.linalg.norm(dq))
-            if norm > self.max_step:
-                dq *= self.max_step / norm
+            dq = damped_least_squares_step(g, e, self.damping, self.max_step)
             q[idx] = np.clip(q[idx] + dq, lo, hi)
         return DlsResult(q, res, it, bool(worst <= self.success_tolerance))
