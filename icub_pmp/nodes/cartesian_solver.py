@@ -54,6 +54,7 @@ from icub_pmp.nodes.conversions import (
     validate_joint_state,
 )
 from icub_pmp.nodes.node_runner import run_node
+from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["CartesianSolverNode", "main"]
 
@@ -239,12 +240,15 @@ class CartesianSolverNode(Node):
         gen.set_target(sol.q)
         traj = gen.rollout()
         msg = arrays_to_trajectory(traj.joint_names, traj.t, traj.q, traj.qd, stamp=now.to_msg())
+        wait = self.node_config.subscriber_timeout
+        listening = subscriber_note(wait_for_subscribers(self.traj_pub, wait), wait)
         self.traj_pub.publish(msg)
         self._active = _Active(now, traj, chain, q_start)
         resp.trajectory = msg
         resp.message = (
             f"{sol.message}; trajectory of {len(traj.t)} points over {traj.duration:.2f} s"
             + (" (continued from the running one)" if state is not None else "")
+            + listening
         )
 
 

@@ -44,6 +44,7 @@ from icub_pmp.nodes.conversions import (
     validate_joint_state,
 )
 from icub_pmp.nodes.node_runner import run_node
+from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
 
 __all__ = ["PmpPlannerNode", "main"]
@@ -54,6 +55,9 @@ NODE_PARAMETERS = {
         True, "no /joint_states yet and no start_state: plan from 'rest' (not executed)"),
     "joint_state_timeout": (0.0, "[s] older /joint_states count as missing (0 = any age)"),
     "warm_up": (True, "build the bimanual+torso posture memory before serving"),
+    "subscriber_timeout": (
+        1.0, "[s, wall] wait up to this long for a subscriber on /joint_trajectory before "
+             "publishing a plan (discovery right after start-up)"),
 }
 
 
@@ -103,9 +107,10 @@ class PmpPlannerNode(Node):
     # ------------------------------------------------------------------ parameters
     @staticmethod
     def _check_node_parameters(values: dict) -> None:
-        t = values.get("joint_state_timeout", 0.0)
-        if not isinstance(t, float) or not math.isfinite(t) or t < 0:
-            raise ConfigError(f"joint_state_timeout: expected a float >= 0 s, got {t!r}")
+        for name in ("joint_state_timeout", "subscriber_timeout"):
+            t = values.get(name, 0.0)
+            if not isinstance(t, float) or not math.isfinite(t) or t < 0:
+                raise ConfigError(f"{name}: expected a float >= 0 s, got {t!r}")
 
     def _on_set_parameters(self, params: list) -> SetParametersResult:
         current = {n: self.get_parameter(n).value for n in PmpConfig.field_names()}
@@ -165,7 +170,10 @@ class PmpPlannerNode(Node):
         res.trajectory = arrays_to_trajectory(
             plan.joint_names, plan.t, plan.positions, plan.velocities)
         execute = plan.success and not req.simulate_only and not assumed
+        listening = ""
         if execute:
+            wait = float(self.get_parameter("subscriber_timeout").value)
+            listening = subscriber_note(wait_for_subscribers(self.trajectory_pub, wait), wait)
             self.trajectory_pub.publish(res.trajectory)
         stamp = self.get_clock().now().to_msg()
         for h in plan.hands:
@@ -175,7 +183,7 @@ class PmpPlannerNode(Node):
         if req.simulate_only:
             what = "simulated only"
         elif execute:
-            what = "published on /joint_trajectory"
+            what = "published on /joint_trajectory" + listening
         else:
             what = "not executed"
         res.message = f"{plan.message}; {what}{note}"
