@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from icub_pmp.kinematics import IcubModel
+from icub_pmp.nodes.conversions import time_to_sec
 from icub_pmp.testing import NodeGraph, NodeProcess, RosProbe, repo_root, reserve_domain_id
 
 __all__ = ["PhaseResult", "DemoRunner", "main"]
@@ -108,8 +109,7 @@ class DemoRunner:
     def _on_object(self, name: str, msg) -> None:
         self.latest[name] = msg
         p = msg.pose.position
-        self._object_history[name].append(
-            (msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, (p.x, p.y, p.z)))
+        self._object_history[name].append((time_to_sec(msg.header.stamp), (p.x, p.y, p.z)))
 
     # ----------------------------------------------------------------- state
     def sim_time(self) -> float:
@@ -145,7 +145,7 @@ class DemoRunner:
         hist = list(self._object_history[name])
         if not hist:
             raise KeyError(f"no ground truth received for {name}")
-        stamp, pos = min(hist, key=lambda sp: abs(sp[0] - t))
+        _, pos = min(hist, key=lambda sp: abs(sp[0] - t))
         return np.array(pos)
 
     def gaze(self, angles_deg: dict[str, float], duration: float = 1.0) -> None:
@@ -403,7 +403,7 @@ def run_phases(runner: DemoRunner, quick: bool) -> list[PhaseResult]:
         vr = runner.pmp_reach("vision_reach", {"right": target}, use_torso=True, tau=2.0)
         # the segmenter sees the cylinder only while it moves: its last target is that of the
         # last image with motion, so compare it with where the cylinder was at that image
-        t_seen = seen.header.stamp.sec + seen.header.stamp.nanosec * 1e-9
+        t_seen = time_to_sec(seen.header.stamp)
         truth_seen = runner.object_position_at("cylinder", t_seen)
         vr.extra["target_error_m"] = float(np.linalg.norm(est - truth_seen))
         vr.extra["target_age_s"] = runner.sim_time() - t_seen
