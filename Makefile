@@ -4,7 +4,7 @@ SHELL := /bin/bash
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 VPY := $(VENV)/bin/python
-IFACES := $(wildcard icub_interfaces/srv/*.srv icub_interfaces/msg/*.msg) icub_interfaces/CMakeLists.txt icub_interfaces/package.xml
+IFACES := $(wildcard icub_interfaces/srv/*.srv icub_interfaces/msg/*.msg icub_interfaces/action/*.action) icub_interfaces/CMakeLists.txt icub_interfaces/package.xml
 # tf2_msgs (TFMessage for /tf): the wheels lack it; built from interfaces/tf2_msgs only where missing.
 IFACES += $(wildcard interfaces/tf2_msgs/msg/*.msg interfaces/tf2_msgs/CMakeLists.txt interfaces/tf2_msgs/package.xml)
 TF2_MSGS = $$(test -e $(VENV)/share/ament_index/resource_index/packages/tf2_msgs || echo interfaces/tf2_msgs)

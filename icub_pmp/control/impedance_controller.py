@@ -18,9 +18,19 @@ Per step (one joint-state sample):
 5. saturation at the :class:`RobotSpec` torque limits.
 
 Watchdogs: an estimate older than ``estimate_timeout`` (in the joint states' time) turns the
-torque loop off (feed-forward only); no joint state for ``state_timeout`` (checked by
-:meth:`check_watchdog`) aborts every motion and latches a hold at the last measured posture.
-Inputs with NaN, wrong sizes or unknown joints raise :class:`InvalidInput` and change nothing.
+torque loop off (feed-forward only); with the torque loop on, no estimate for
+``estimate_lost_timeout`` latches a safe hold until estimates are back; no joint state for
+``state_timeout`` (checked by :meth:`check_watchdog`, in the joint states' time) or for
+``state_wall_timeout`` of wall time (the node calls :meth:`enter_safe_hold`) aborts every
+motion and latches a hold at the last measured posture until joint states are back. The
+reason is kept in :attr:`safe_hold_reason`.
+
+Trajectories must respect the joints' velocity and acceleration limits
+(:class:`JointRateLimits`, from ``config/robot.yaml``): a faster one is refused with a message
+naming the joint. :meth:`execute` starts a trajectory as a goal (:class:`TrajectoryGoal`)
+whose outcome (success, preemption, tolerance violations, safe hold, cancel) is decided
+step by step. Inputs with NaN, wrong sizes or unknown joints raise :class:`InvalidInput` and
+change nothing.
 """
 
 from __future__ import annotations
@@ -34,6 +44,8 @@ from icub_pmp.control.impedance_controller_config import ImpedanceControllerConf
 from icub_pmp.control.joint_trajectory import JointTrajectory
 from icub_pmp.control.setpoint_generator import Setpoint, SetpointGenerator
 from icub_pmp.control.torque_pid import TorquePid
+from icub_pmp.control.trajectory_goal import GoalCode, TrajectoryGoal
+from icub_pmp.control.trajectory_limits import JointRateLimits
 from icub_pmp.errors import InvalidInput
 from icub_pmp.kinematics.eye_kinematics import EYE_LIMITS
 from icub_pmp.kinematics.robot_model import IcubModel
@@ -99,6 +111,7 @@ class ImpedanceController:
         self.lower.setflags(write=False)
         self.upper.setflags(write=False)
         self.torque_limits = np.array([self.spec.torque_limit(j) for j in self.joint_names])
+        self.rate_limits = JointRateLimits.from_spec(self.spec, self.joint_names)
         self._pid = TorquePid(self.n)
         self.set_config(config or ImpedanceControllerConfig())
         self._est = np.zeros(self.n)
@@ -108,7 +121,11 @@ class ImpedanceController:
         self._q = np.zeros(self.n)
         self._saturated = np.zeros(self.n, dtype=bool)
         self._safe = False
+        self._safe_kind = ""  # "state": released by a joint state; "estimate": by an estimate
+        self._safe_reason: str | None = None
         self._was_fresh = False
+        self._goals: list[TrajectoryGoal] = []
+        self._goal_seq = 0
         self.steps = 0
 
     # ------------------------------------------------------------------ configuration
@@ -163,11 +180,64 @@ class ImpedanceController:
         )
 
     def set_trajectory(self, traj: JointTrajectory, t_now: float) -> None:
-        """Follow ``traj`` from time ``t_now`` [s] (preempts older sources on its joints)."""
+        """Follow ``traj`` from time ``t_now`` [s] (preempts older sources on its joints).
+
+        Raises :class:`InvalidInput` in a safe hold or when the trajectory, joined from the
+        current set-point, exceeds the joints' velocity or acceleration limits."""
+        self.setpoints.follow(self._checked(traj, t_now))
+
+    def _checked(self, traj: JointTrajectory, t_now: float) -> JointTrajectory:
         if self._safe:
-            raise InvalidInput(
-                "controller is in safe hold (stale joint states): trajectory refused")
-        self.setpoints.set_trajectory(traj, t_now)
+            raise InvalidInput(f"controller is in safe hold ({self._safe_reason}): refused")
+        anchored = self.setpoints.anchor(traj, t_now)
+        self.rate_limits.check(anchored, self.config.rate_limit_tolerance)
+        return anchored
+
+    def execute(self, traj: JointTrajectory, t_now: float,
+                path_tolerance: Sequence[float] = (), goal_tolerance: Sequence[float] = (),
+                goal_time_tolerance: float = 0.0) -> TrajectoryGoal:
+        """Start ``traj`` as a goal (see :class:`TrajectoryGoal`); tolerances [rad] per joint
+        of ``traj`` or one value for all (empty = the configured default), goal time
+        tolerance [s] (0 = default). Raises :class:`InvalidInput` as :meth:`set_trajectory`
+        and on bad tolerances."""
+        k = len(traj.joint_names)
+        c = self.config
+        path = _tolerances(path_tolerance, k, c.path_tolerance, "path_tolerance")
+        goal = _tolerances(goal_tolerance, k, c.goal_tolerance, "goal_tolerance")
+        gtt = float(goal_time_tolerance)
+        if not math.isfinite(gtt) or gtt < 0:
+            raise InvalidInput(f"goal_time_tolerance: expected a finite time >= 0 s, got {gtt}")
+        anchored = self._checked(traj, t_now)
+        self._goal_seq += 1
+        idx = self.setpoints.follow(anchored, owner=self._goal_seq)
+        g = TrajectoryGoal(self._goal_seq, anchored.joint_names, idx, anchored.start,
+                           anchored.end, path, goal, gtt or c.goal_time_tolerance)
+        self._goals.append(g)
+        return g
+
+    def cancel(self, goal: TrajectoryGoal) -> None:
+        """Stop ``goal``: the joints it still owns hold their measured position (outcome
+        CANCELED)."""
+        if goal.done:
+            return
+        owned = goal.idx[self.setpoints.owner[goal.idx] == goal.goal_id]
+        if len(owned) and self._t is not None:
+            self.setpoints.hold_joints(owned, self._q[owned])
+        t = self._t if self._t is not None else goal.start
+        goal.finish(GoalCode.CANCELED, "canceled", self._q, self.setpoints.q, t)
+        self._goals = [g for g in self._goals if not g.done]
+
+    @property
+    def measured_position(self) -> np.ndarray:
+        """The last measured joint positions (n,) [rad] (read-only copy)."""
+        q = self._q.copy()
+        q.setflags(write=False)
+        return q
+
+    @property
+    def goals(self) -> tuple[TrajectoryGoal, ...]:
+        """The goals still running."""
+        return tuple(self._goals)
 
     def set_velocity_command(self, names: Sequence[str], velocities: np.ndarray,
                              t_now: float) -> None:
@@ -199,20 +269,39 @@ class ImpedanceController:
     # ------------------------------------------------------------------ watchdog
     def check_watchdog(self, now: float) -> bool:
         """Trip the safe hold if the last joint state is older than ``state_timeout`` at
-        ``now`` [s]. Returns True when it trips on this call."""
-        if self._t is None or self._safe:
+        ``now`` [s] (the joint states' clock). Returns True when it trips on this call."""
+        if self._t is None or (self._safe and self._safe_kind == "state"):
             return False
         if now - self._t > self.config.state_timeout:
-            self._safe = True
-            self.setpoints.hold(self._q)
-            self._pid.reset()
+            self.enter_safe_hold(f"no joint state for {self.config.state_timeout} s")
             return True
         return False
 
+    def enter_safe_hold(self, reason: str, kind: str = "state") -> None:
+        """Abort every motion and goal and hold the last measured posture until joint states
+        (``kind`` 'state') or estimates ('estimate') are back."""
+        if self._safe and self._safe_kind == "state":
+            return
+        self._safe = True
+        self._safe_kind = kind
+        self._safe_reason = reason
+        if self._t is not None:
+            self.setpoints.hold(self._q)
+            for g in self._goals:
+                g.finish(GoalCode.SAFE_HOLD, f"safe hold: {reason}", self._q,
+                         self.setpoints.q, self._t)
+        self._goals = []
+        self._pid.reset()
+
     @property
     def safe_hold(self) -> bool:
-        """True while the joint-state watchdog holds the robot."""
+        """True while a watchdog holds the robot (:attr:`safe_hold_reason` says why)."""
         return self._safe
+
+    @property
+    def safe_hold_reason(self) -> str | None:
+        """Why the robot is held (None when it is not)."""
+        return self._safe_reason if self._safe else None
 
     # ------------------------------------------------------------------ step
     def step(self, t: float, q: np.ndarray, v: np.ndarray) -> ControlOutput:
@@ -227,11 +316,16 @@ class ImpedanceController:
             raise InvalidInput("step: joint state contains NaN or infinite values")
         c = self.config
         if self._t is None or t < self._t - 1e-9:  # first sample, or time went back (reset)
+            if self._t is not None:
+                for g in self._goals:
+                    g.finish(GoalCode.SAFE_HOLD, "time went back (simulator reset): motion "
+                             "stopped", self._q, self.setpoints.q, self._t)
+                self._goals = []
             self.setpoints.hold(q, t)
             self._pid.reset()
             self._t = None
             self._safe = False
-        elif self._safe:  # joint states are back after the watchdog tripped
+        elif self._safe and self._safe_kind == "state":  # joint states are back
             self._safe = False
             self.setpoints.hold(q, t)
         dt = 0.0 if self._t is None else t - self._t
@@ -279,6 +373,15 @@ class ImpedanceController:
         if fresh and not self._was_fresh:
             self._pid.reset()
         self._was_fresh = fresh
+        if c.torque_loop and c.estimate_lost_timeout > 0 and self._est_t is not None:
+            if fresh and self._safe and self._safe_kind == "estimate":
+                self._safe = False  # estimates are back: motions may be commanded again
+            elif (not fresh and not self._safe
+                  and t - self._est_t > c.estimate_lost_timeout):
+                # takes effect from the next step (the set-point is held from now on)
+                self.enter_safe_hold(
+                    f"estimator lost: no joint torque estimate for "
+                    f"{c.estimate_lost_timeout} s", kind="estimate")
         if c.torque_loop and fresh:
             tau = self._pid(tau_d, self._est, dt, self._est_mask, self._saturated)
         else:
@@ -288,4 +391,25 @@ class ImpedanceController:
         self._saturated = np.abs(tau) > self._tau_max
         np.clip(tau, -self._tau_max, self._tau_max, out=tau)
         self.steps += 1
+        if self._goals:
+            owner = self.setpoints.owner
+            for g in self._goals:
+                g.update(t, q, sp.q, bool(np.all(owner[g.idx] == g.goal_id)), None)
+            self._goals = [g for g in self._goals if not g.done]
+        if self._safe:
+            status = "safe_hold"
         return ControlOutput(float(t), tau, tau_d, sp, self._saturated.copy(), guard, status)
+
+
+def _tolerances(values: Sequence[float], k: int, default: float, name: str) -> np.ndarray:
+    """Per-joint tolerances (k,) [rad] from a goal's list: empty = default, one = all."""
+    v = np.asarray(list(values), dtype=float).reshape(-1)
+    if v.size == 0:
+        v = np.full(k, default)
+    elif v.size == 1:
+        v = np.full(k, float(v[0]))
+    elif v.size != k:
+        raise InvalidInput(f"{name}: expected 0, 1 or {k} values (one per joint), got {v.size}")
+    if not np.all(np.isfinite(v)) or np.any(v < 0):
+        raise InvalidInput(f"{name}: values must be finite and >= 0 [rad], got {v.tolist()}")
+    return v

@@ -63,8 +63,19 @@ class ImpedanceControllerConfig(ConfigBase):
     joint_limit_stiffness: float = 50.0  # guard spring in the band [N m/rad]
     joint_limit_damping: float = 2.0  # guard damping of outward motion in the band [N m s/rad]
     estimate_timeout: float = 0.05  # estimate older than this -> torque loop off [s]
-    state_timeout: float = 0.1  # no joint state for this long -> safe hold [s]
+    estimate_lost_timeout: float = 0.5  # torque loop on, no estimate this long -> safe hold
+    # [s] (0 = never: feed-forward only)
+    state_timeout: float = 0.1  # no joint state for this long -> safe hold [s, joint states' time]
+    state_wall_timeout: float = 2.0  # no joint state for this long in wall time -> safe hold,
+    # "simulator paused or gone" [s, wall] (0 = never)
     velocity_command_timeout: float = 0.2  # velocity command lapses after this [s]
+    rate_limit_tolerance: float = 0.05  # refuse trajectories beyond the joint velocity /
+    # acceleration limits of config/robot.yaml by more than this fraction [-]
+    # trajectory goals (FollowJointTrajectory action): defaults when a goal leaves them empty
+    path_tolerance: float = 0.0  # |q - q_d| allowed while moving [rad] (0 = no check)
+    goal_tolerance: float = 0.05  # |q - q_d| allowed at the end [rad] (0 = no check)
+    goal_time_tolerance: float = 1.0  # time after the last point to come within it [s]
+    feedback_every: int = 50  # action feedback every N control steps
     # node
     lockstep: bool = True  # answer every /joint_states at once (stamp copied)
     wait_for_estimate: bool = False  # lockstep: answer only with an estimate of the same stamp
@@ -93,6 +104,13 @@ class ImpedanceControllerConfig(ConfigBase):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ConfigError(f"{name} must be finite and >= 0, got {v}")
+        for name in ("estimate_lost_timeout", "state_wall_timeout", "rate_limit_tolerance",
+                     "path_tolerance", "goal_tolerance", "goal_time_tolerance"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ConfigError(f"{name} must be finite and >= 0, got {v}")
+        if self.feedback_every < 1:
+            raise ConfigError(f"feedback_every must be >= 1, got {self.feedback_every}")
         for name in ("torque_derivative_cutoff_hz", "estimate_timeout", "state_timeout",
                      "velocity_command_timeout"):
             if not getattr(self, name) > 0:

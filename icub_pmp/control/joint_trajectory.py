@@ -195,6 +195,24 @@ class JointTrajectory:
         c[:, 5] = (12 * d - 6 * (v1 + v0) * dt + (a1 - a0) * dt**2) / (2 * dt**5)
         self._coeffs = c
 
+    def peak_rates(self, samples_per_segment: int = 16) -> tuple[np.ndarray, np.ndarray]:
+        """Largest |velocity| [rad/s] and |acceleration| [rad/s^2] of each joint (n,) over the
+        interpolated trajectory, sampled ``samples_per_segment`` times per segment (both ends
+        included)."""
+        n = len(self.joint_names)
+        if len(self.times) < 2:
+            return np.zeros(n), np.zeros(n)
+        if self._coeffs is None:
+            self._build()
+        c = self._coeffs
+        dt = np.diff(self.times)
+        s = np.linspace(0.0, 1.0, samples_per_segment)[None, :] * dt[:, None]  # (nseg, m)
+        s = s[:, :, None]
+        c1, c2, c3, c4, c5 = (c[:, k][:, None, :] for k in range(1, 6))
+        v = c1 + s * (2 * c2 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))
+        a = 2 * c2 + s * (6 * c3 + s * (12 * c4 + s * 20 * c5))
+        return np.abs(v).max(axis=(0, 1)), np.abs(a).max(axis=(0, 1))
+
     def sample(self, t: float) -> TrajectorySample:
         """Desired state at absolute time ``t`` [s]: the first point (at rest) before the first
         time, the last point (at rest) after the last one."""

@@ -57,6 +57,9 @@ class SetpointGenerator:
         self._vel_deadline = -np.inf
         self._t: float | None = None
         self.initialised = False
+        #: per joint, the token of the source that owns it (0 = a hold, a velocity command or
+        #: an anonymous trajectory; > 0 = a trajectory goal, see TrajectoryGoal)
+        self.owner = np.zeros(self.n, dtype=np.int64)
 
     def indices(self, names: Sequence[str]) -> np.ndarray:
         """Positions of ``names`` in the joint vector (raises UnknownName)."""
@@ -77,8 +80,20 @@ class SetpointGenerator:
         self.effort = np.zeros(self.n)
         self._trajs.clear()
         self._vel_mask[:] = False
+        self.owner[:] = 0
         if t is not None:
             self._t = float(t)
+
+    def hold_joints(self, idx: np.ndarray, q: np.ndarray) -> None:
+        """Stop every source on joints ``idx`` and hold them at ``q`` (len(idx),) [rad] at
+        rest; the other joints keep what they are doing."""
+        idx = np.asarray(idx, dtype=int)
+        self._release(idx)
+        self.q[idx] = np.clip(np.asarray(q, dtype=float), self.lower[idx], self.upper[idx])
+        self.v[idx] = 0.0
+        self.a[idx] = 0.0
+        self.effort[idx] = 0.0
+        self.owner[idx] = 0
 
     def _release(self, idx: np.ndarray) -> None:
         """Remove joints ``idx`` from older sources (trajectories, velocity command)."""
@@ -92,17 +107,29 @@ class SetpointGenerator:
         self._trajs = kept
         self._vel_mask[idx] = False
 
-    def set_trajectory(self, traj: JointTrajectory, t_now: float) -> None:
-        """Follow ``traj`` (its ``start`` is absolute time; a start in the past means 'now')
-        on its joints, joined from their current set-point."""
+    def anchor(self, traj: JointTrajectory, t_now: float) -> JointTrajectory:
+        """``traj`` as it would be followed from ``t_now`` [s]: joined from its joints'
+        current set-point, starting at its own start or now, whichever is later."""
         if not self.initialised:
             raise InvalidInput("no joint state received yet: cannot start a trajectory")
         idx = self.indices(traj.joint_names)
-        anchored = traj.anchored(
+        return traj.anchored(
             self.q[idx], self.v[idx], self.a[idx], start=max(traj.start, float(t_now))
         )
+
+    def follow(self, anchored: JointTrajectory, owner: int = 0) -> np.ndarray:
+        """Follow an :meth:`anchor` ed trajectory on its joints (token ``owner``); returns the
+        joint indices."""
+        idx = self.indices(anchored.joint_names)
         self._release(idx)
         self._trajs.append((anchored, idx))
+        self.owner[idx] = owner
+        return idx
+
+    def set_trajectory(self, traj: JointTrajectory, t_now: float, owner: int = 0) -> None:
+        """Follow ``traj`` (its ``start`` is absolute time; a start in the past means 'now')
+        on its joints, joined from their current set-point."""
+        self.follow(self.anchor(traj, t_now), owner)
 
     def set_velocity(self, names: Sequence[str], velocities: np.ndarray, t_now: float,
                      timeout: float) -> None:
@@ -116,6 +143,7 @@ class SetpointGenerator:
                 f"velocity command: expected {len(idx)} finite velocities, got {vel!r}"
             )
         self._release(idx)
+        self.owner[idx] = 0
         self._vel_mask[idx] = True
         self._vel_cmd[idx] = vel
         self._vel_deadline = t_now + timeout

@@ -34,6 +34,8 @@ class RobotSpec:
     root_frame: str
     torque_limits: Mapping[str, float]
     postures: Mapping[str, Mapping[str, float]]
+    velocity_limits: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    acceleration_limits: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> "RobotSpec":
@@ -79,6 +81,26 @@ class RobotSpec:
             raise UnknownName("joint", joint, self.torque_limits)
         return self.torque_limits[joint]
 
+    def velocity_limit(self, joint: str) -> float:
+        """Largest joint speed of ``joint`` [rad/s] (``velocity_limits``: per joint or
+        ``default``)."""
+        return _rate_limit(self.velocity_limits, joint, self.actuated_joints, "velocity")
+
+    def acceleration_limit(self, joint: str) -> float:
+        """Largest joint acceleration of ``joint`` [rad/s^2] (``acceleration_limits``)."""
+        return _rate_limit(self.acceleration_limits, joint, self.actuated_joints,
+                           "acceleration")
+
+
+def _rate_limit(limits: Mapping[str, float], joint: str, joints: tuple[str, ...],
+                what: str) -> float:
+    if joint not in joints:
+        raise UnknownName("joint", joint, joints)
+    value = limits.get(joint, limits.get("default"))
+    if value is None:
+        raise ConfigError(f"robot spec: no {what} limit for {joint!r} and no default")
+    return value
+
 
 @lru_cache(maxsize=8)
 def _load_cached(path: str) -> RobotSpec:
@@ -87,8 +109,9 @@ def _load_cached(path: str) -> RobotSpec:
     except (OSError, yaml.YAMLError) as exc:
         raise ConfigError(f"cannot read robot spec {path}: {exc}") from exc
     names = {f.name for f in dataclasses.fields(RobotSpec)}
+    optional = {"velocity_limits", "acceleration_limits"}
     unknown = sorted(set(d) - names)
-    missing = sorted(names - set(d))
+    missing = sorted(names - optional - set(d))
     if unknown or missing:
         raise ConfigError(f"{path}: unknown keys {unknown}, missing keys {missing}")
     postures = {
@@ -107,6 +130,9 @@ def _load_cached(path: str) -> RobotSpec:
         root_frame=str(d["root_frame"]),
         torque_limits=MappingProxyType({k: float(v) for k, v in d["torque_limits"].items()}),
         postures=MappingProxyType(postures),
+        velocity_limits=_rad_limits(d.get("velocity_limits"), path, "velocity_limits"),
+        acceleration_limits=_rad_limits(d.get("acceleration_limits"), path,
+                                        "acceleration_limits"),
     )
     missing_tau = sorted(set(spec.actuated_joints) - set(spec.torque_limits))
     if missing_tau:
@@ -116,6 +142,20 @@ def _load_cached(path: str) -> RobotSpec:
         if bad:
             raise ConfigError(f"{path}: posture {name!r} names unknown joints {bad}")
     return spec
+
+
+def _rad_limits(d: Mapping | None, path: str, key: str) -> Mapping[str, float]:
+    """{joint or 'default': limit} in deg/s or deg/s^2 -> rad units, each finite and > 0."""
+    out = {}
+    for k, v in (d or {}).items():
+        try:
+            value = float(v)
+        except (TypeError, ValueError):
+            value = math.nan
+        if not math.isfinite(value) or value <= 0:
+            raise ConfigError(f"{path}: {key}.{k} must be a number > 0, got {v!r}")
+        out[str(k)] = math.radians(value)
+    return MappingProxyType(out)
 
 
 def urdf_path(model_name: str) -> Path:

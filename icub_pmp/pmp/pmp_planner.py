@@ -385,7 +385,7 @@ class PmpPlanner:
         if any(rot_res.values()):
             text += "; orientation " + ", ".join(f"{h} {rot_res[h]:.4f} rad" for h in hands)
         if ok:
-            head = "reached"
+            head = "planned (mental simulation reaches the target)"
         else:
             short = [h for h in hands if residuals[h] > c.success_tolerance]
             if short:
