@@ -1,10 +1,20 @@
 #!/usr/bin/env bash
 # Start the whole node graph (each node with its config/<node>.yaml) and keep it running until
-# Ctrl-C; then stop exactly the children this script started (SIGINT, then SIGKILL).
+# Ctrl-C, SIGINT or SIGTERM; then stop exactly the children this script started (SIGTERM,
+# then SIGKILL after 5 s) and exit. Works when started in the background by another script
+# too: bash ignores SIGINT in background jobs and cannot trap a signal ignored on entry, so the
+# script first re-executes itself with SIGINT restored to its default.
 #   scripts/graph.sh                 # all nodes
 #   GRAPH_NODES="sim_bridge pmp_planner" scripts/graph.sh
+#   MODE=lockstep scripts/graph.sh   # simulator and controller in lockstep (exact 1 kHz loop)
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# SIGINT ignored on entry (bit 2 of SigIgn): re-exec with it restored, once
+if [[ -z "${ICUB_GRAPH_SIGNALS:-}" ]] && \
+   (( 0x$(awk '/^SigIgn:/ {print $2}' /proc/$$/status) & 2 )); then
+  export ICUB_GRAPH_SIGNALS=1
+  exec python3 -c 'import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execv("/bin/bash", ["/bin/bash"] + sys.argv[1:])' "${BASH_SOURCE[0]}" "$@"
+fi
 if [[ ! -f "$ROOT/install/.build-stamp" ]]; then
   echo "graph.sh: the environment is not built; run 'make env' first" >&2
   exit 2
@@ -16,7 +26,7 @@ PIDS=()
 stop() {
   trap - INT TERM EXIT
   echo "graph.sh: stopping ${#PIDS[@]} node(s): ${PIDS[*]}" >&2
-  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null; done
+  for p in "${PIDS[@]}"; do kill -TERM "$p" 2>/dev/null; done
   for _ in $(seq 50); do
     alive=0
     for p in "${PIDS[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
@@ -26,13 +36,23 @@ stop() {
   for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
   wait 2>/dev/null
 }
-trap stop INT TERM EXIT
+trap 'stop; exit 130' INT
+trap 'stop; exit 143' TERM
+trap stop EXIT
+case "${MODE:-}" in
+  ""|free_run|lockstep) ;;
+  *) echo "graph.sh: MODE must be free_run or lockstep, got '${MODE}'" >&2; exit 2 ;;
+esac
 for n in $NODES; do
   if [[ ! -x "$ROOT/install/icub_pmp/lib/icub_pmp/$n" ]]; then
     echo "graph.sh: skipping $n (not installed)" >&2
     continue
   fi
-  "$ROOT/scripts/node.sh" "$n" &
+  if [[ "$n" == sim_bridge && -n "${MODE:-}" ]]; then
+    "$ROOT/scripts/node.sh" "$n" --ros-args -p "mode:=$MODE" &
+  else
+    "$ROOT/scripts/node.sh" "$n" &
+  fi
   PIDS+=($!)
   echo "graph.sh: started $n (pid $!)" >&2
 done

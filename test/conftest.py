@@ -42,3 +42,15 @@ def ros_probe(ros_domain_id):
         yield probe
     finally:
         probe.close()
+
+
+@pytest.fixture(scope="module")
+def ros_probe_module(ros_domain_id):
+    """A probe shared by the tests of one module (for module-scoped graphs)."""
+    from icub_pmp.testing import RosProbe
+
+    probe = RosProbe(ros_domain_id, "module_probe")
+    try:
+        yield probe
+    finally:
+        probe.close()

@@ -55,11 +55,11 @@ def _run(c: ImpedanceController, t0: float, t1: float, follow: bool = True,
 
 
 def test_robot_spec_rate_limits_are_the_cited_values():
-    """config/robot.yaml: 100 deg/s on every joint (icub-models jntVelMax), 600 deg/s^2."""
+    """config/robot.yaml: 100 deg/s on every joint (icub-models jntVelMax), 2000 deg/s^2."""
     spec = RobotSpec.load()
     for j in spec.actuated_joints:
         assert spec.velocity_limit(j) == pytest.approx(math.radians(100.0))
-        assert spec.acceleration_limit(j) == pytest.approx(math.radians(600.0))
+        assert spec.acceleration_limit(j) == pytest.approx(math.radians(2000.0))
 
 
 def test_peak_rates_of_a_min_jerk_point_to_point():

@@ -287,14 +287,14 @@ def _watchdog(did: int) -> None:
         # loaded machine: feed joint states until the first answer arrives, then count
         assert probe.wait_for(lambda: send(5) or len(got) > 0, 30.0), proc.output()[-2000:]
         got.clear()
-        trips, backs = (proc.output().count(t) for t in ("safe hold", "joint states are back"))
+        trips, backs = (proc.output().count(t) for t in ("safe hold", "safe hold released"))
         send(40)
         assert probe.wait_for(lambda: proc.output().count("safe hold") > trips, 20.0), \
             proc.output()[-2000:]
         probe.destroy(sub)
         assert len(got) > 20 and len(got[-1].effort) == len(spec.actuated_joints)
         send(20)
-        assert probe.wait_for(lambda: proc.output().count("joint states are back") > backs,
+        assert probe.wait_for(lambda: proc.output().count("safe hold released") > backs,
                               20.0), proc.output()[-2000:]
     finally:
         probe.close()

@@ -122,10 +122,16 @@ def test_reach_round_trip_between_processes(reach_server, ros_probe):
 
 
 def test_reach_missing_service_gives_clear_timeout(ros_domain_id):
-    """Without a server the CLI says which service is missing, exits non-zero, no traceback."""
-    out = icub("reach", "right=-0.3,0.1,0.0", "--service", "/no_such/reach", "--timeout", "1")
+    """Without a server the CLI says which service or action is missing and that no node
+    offers it, exits non-zero, no traceback."""
+    out = icub("reach", "right=-0.3,0.1,0.0", "--simulate", "--service", "/no_such/reach",
+               "--timeout", "1")
     assert out.returncode != 0
-    assert "service /no_such/reach not available after 1.0 s" in out.stderr
+    assert "service /no_such/reach not available after 1 s: no node offers it" in out.stderr
+    assert "Traceback" not in out.stderr
+    out = icub("reach", "right=-0.3,0.1,0.0", "--action", "/no_such/reach", "--timeout", "1")
+    assert out.returncode != 0
+    assert "action /no_such/reach not available after 1 s: no node offers it" in out.stderr
     assert "Traceback" not in out.stderr
 
 

@@ -99,7 +99,7 @@ def test_reach_service_over_dds(node, ros_probe, model):
     assert ros_probe.wait_for(planned_from_state, 20.0), node.output()
     n_traj = len(traj.msgs)
     resp = ros_probe.call("/pmp/reach", Reach, request(use_torso=True))
-    assert resp.success and "published" in resp.message, resp.message
+    assert resp.success and "sent on /joint_trajectory" in resp.message, resp.message
     first = dict(zip(resp.trajectory.joint_names, resp.trajectory.points[0].positions))
     for j in ("r_elbow", "r_shoulder_pitch", "torso_pitch"):
         assert first[j] == pytest.approx(current[names.index(j)], abs=1e-9)

@@ -14,7 +14,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "matching_qos"]
+__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "matching_qos", "not_ready_reason"]
 
 
 @contextlib.contextmanager
@@ -40,6 +40,23 @@ def spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool], timeo
     while not done() and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=min(0.05, max(0.0, deadline - time.monotonic())))
     return done()
+
+
+def not_ready_reason(node: Node, name: str, kind: str, timeout: float, server: str) -> str:
+    """Why a service or action ``name`` was not ready after ``timeout`` s: either nothing in
+    the graph offers it (with the hint ``server``: which node should), or it exists but this
+    client was not matched with it yet (discovery is slow on a loaded machine)."""
+    if kind == "action":
+        probe = f"{name}/_action/send_goal"
+    else:
+        probe = name
+    if node.count_services(probe) > 0:
+        return (f"{kind} {name} exists in the graph but was not matched after {timeout:g} s "
+                f"(DDS discovery is slow on a loaded machine: retry, or give a longer "
+                f"--timeout)")
+    domain = os.environ.get("ROS_DOMAIN_ID", "0")
+    return (f"{kind} {name} not available after {timeout:g} s: no node offers it in "
+            f"ROS_DOMAIN_ID {domain} (is {server} running?)")
 
 
 def wait_for_topic_type(

@@ -127,6 +127,8 @@ class ImpedanceController:
         self._goals: list[TrajectoryGoal] = []
         self._goal_seq = 0
         self.steps = 0
+        #: steps with the torque loop on that had no fresh estimate (after the first one)
+        self.stale_estimate_steps = 0
 
     # ------------------------------------------------------------------ configuration
     def set_config(self, config: ImpedanceControllerConfig) -> None:
@@ -226,6 +228,10 @@ class ImpedanceController:
         t = self._t if self._t is not None else goal.start
         goal.finish(GoalCode.CANCELED, "canceled", self._q, self.setpoints.q, t)
         self._goals = [g for g in self._goals if not g.done]
+
+    def estimate_age(self, t: float) -> float:
+        """Time from the latest estimate to ``t`` [s] (-1 before the first estimate)."""
+        return -1.0 if self._est_t is None else float(t) - self._est_t
 
     @property
     def measured_position(self) -> np.ndarray:
@@ -382,6 +388,8 @@ class ImpedanceController:
                 self.enter_safe_hold(
                     f"estimator lost: no joint torque estimate for "
                     f"{c.estimate_lost_timeout} s", kind="estimate")
+        if c.torque_loop and not fresh and self._est_t is not None:
+            self.stale_estimate_steps += 1
         if c.torque_loop and fresh:
             tau = self._pid(tau_d, self._est, dt, self._est_mask, self._saturated)
         else:

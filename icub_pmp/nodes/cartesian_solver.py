@@ -9,6 +9,13 @@ Services
   trajectory of the same chain runs starts from that trajectory's state at the current time,
   so the motion bends smoothly toward the new target.
 
+Action ``/cartesian/go_to_pose_action`` (icub_interfaces/action/GoToPose): the same plan,
+executed through the impedance controller's FollowJointTrajectory action, with feedback (the
+hand's distance to the target measured from /joint_states) and a result measured on the robot
+after the hand settled (:class:`~icub_pmp.ros.goal_execution.GoalExecution`). The service
+answers "sent", never "reached". Trajectories faster than the joints' velocity/acceleration
+limits (config/robot.yaml) are slowed down to them, and the answer says so.
+
 Subscribes ``/joint_states`` (start configuration). Parameters: the fields of
 :class:`IkConfig`, :class:`MinJerkConfig` and :class:`CartesianNodeConfig`
 (config/cartesian_solver.yaml), validated when set at run time. Bad requests answer
@@ -23,13 +30,16 @@ import math
 from typing import Any
 
 import numpy as np
+from geometry_msgs.msg import Point
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
+from icub_interfaces.action import GoToPose as GoToPoseAction
 from icub_interfaces.srv import GoToPose, SolvePose
 from icub_pmp.cartesian import (
     CartesianNodeConfig,
@@ -41,6 +51,9 @@ from icub_pmp.cartesian import (
     MinJerkGenerator,
     SampledTrajectory,
 )
+from icub_pmp.control.arrival_monitor import ArrivalConfig
+from icub_pmp.control.joint_trajectory import JointTrajectory as CoreTrajectory
+from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory_time
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_model import IcubModel
 from icub_pmp.kinematics.robot_spec import RobotSpec
@@ -55,6 +68,8 @@ from icub_pmp.nodes.conversions import (
 )
 from icub_pmp.nodes.node_runner import run_node
 from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
+from icub_pmp.ros.goal_execution import GoalExecution
+from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 
 __all__ = ["CartesianSolverNode", "main"]
 
@@ -94,11 +109,8 @@ class CartesianSolverNode(Node):
                 f"{'compiled C' if prob.compiled else 'CasADi VM'})"
             )
         self.add_on_set_parameters_callback(self._on_set_parameters)
-        self._latest: dict[str, float] | None = None
+        self.joint_cache = JointStateCache(self)
         self._active: _Active | None = None
-        self.create_subscription(
-            JointState, "joint_states", self._on_joint_states, qos_profile_sensor_data
-        )
         self.traj_pub = self.create_publisher(
             JointTrajectory,
             "joint_trajectory",
@@ -106,9 +118,17 @@ class CartesianSolverNode(Node):
         )
         self.create_service(SolvePose, "cartesian/solve_pose", self._on_solve_pose)
         self.create_service(GoToPose, "cartesian/go_to_pose", self._on_go_to_pose)
+        self.rate_limits = JointRateLimits.from_spec(self.model.spec)
+        self.execution = GoalExecution(self, self.joint_cache, self._hands,
+                                       server_timeout=self.node_config.controller_timeout)
+        self.go_action = ActionServer(
+            self, GoToPoseAction, "cartesian/go_to_pose_action",
+            execute_callback=self._execute_go_to_pose,
+            goal_callback=lambda _goal: GoalResponse.ACCEPT,
+            cancel_callback=lambda _handle: CancelResponse.ACCEPT)
         self.get_logger().info(
-            "serving /cartesian/solve_pose and /cartesian/go_to_pose "
-            f"(default chain {self.node_config.default_chain})"
+            "serving /cartesian/solve_pose, /cartesian/go_to_pose and the action "
+            f"/cartesian/go_to_pose_action (default chain {self.node_config.default_chain})"
         )
 
     # ------------------------------------------------------------------ parameters
@@ -140,15 +160,19 @@ class CartesianSolverNode(Node):
         return SetParametersResult(successful=True)
 
     # ------------------------------------------------------------------ inputs
-    def _on_joint_states(self, msg: JointState) -> None:
-        try:
-            validate_joint_state(msg)
-        except InvalidInput as exc:
-            self.get_logger().warning(
-                f"dropping /joint_states: {exc}", throttle_duration_sec=5.0
-            )
-            return
-        self._latest = joint_state_field(msg)
+    @property
+    def _latest(self) -> dict[str, float] | None:
+        """The latest measured joints {name: rad}, None before the first or when it names
+        joints the model does not know (a stray publisher: dropped with a warning)."""
+        st = self.joint_cache.latest()
+        if st is None:
+            return None
+        unknown = set(st.positions) - set(self.model.spec.actuated_joints)
+        if unknown:
+            self.get_logger().warning(f"dropping /joint_states naming unknown joints "
+                                      f"{sorted(unknown)}", throttle_duration_sec=5.0)
+            return None
+        return st.positions
 
     def _start_q(self, start_state: JointState) -> np.ndarray:
         """Full configuration (nq,) from the request's start_state or the latest joints."""
@@ -210,6 +234,23 @@ class CartesianSolverNode(Node):
         return resp
 
     def _go_to_pose(self, req: GoToPose.Request, resp: GoToPose.Response) -> None:
+        sol, msg, note = self._plan_go_to_pose(req, resp)
+        if msg is None:
+            return
+        wait = self.node_config.subscriber_timeout
+        listening = subscriber_note(wait_for_subscribers(self.traj_pub, wait), wait)
+        self.traj_pub.publish(msg)
+        resp.trajectory = msg
+        resp.message = (f"{note}; sent on /joint_trajectory (execution not monitored: the "
+                        f"/cartesian/go_to_pose_action action reports the measured arrival)"
+                        + listening)
+
+    def _plan_go_to_pose(self, req: Any, resp: Any = None
+                         ) -> tuple[IkSolution, JointTrajectory | None, str]:
+        """Solve eq 11 and roll out the minimum-jerk trajectory, within the joints' rate
+        limits: (solution, trajectory message or None when the solve failed, message).
+        ``req``: a GoToPose service request or action goal (which has no start_state)."""
+        start_state = getattr(req, "start_state", None) or JointState()
         T = float(req.trajectory_time) or self.mj_config.trajectory_time
         if not (math.isfinite(T) and T >= 10 * self.mj_config.period):
             raise InvalidInput(
@@ -220,7 +261,7 @@ class CartesianSolverNode(Node):
         now = self.get_clock().now()
         state = None
         act = self._active
-        if act is not None and act.chain == chain and len(req.start_state.name) == 0:
+        if act is not None and act.chain == chain and len(start_state.name) == 0:
             elapsed = (now - act.start).nanoseconds * 1e-9
             if 0.0 <= elapsed < act.trajectory.duration:
                 state = act.trajectory.state_at(elapsed)
@@ -228,28 +269,103 @@ class CartesianSolverNode(Node):
             q_start = act.q_hold.copy()
             q_start[self.model.indices(act.trajectory.joint_names)] = state.q
         else:
-            q_start = self._start_q(req.start_state)
+            q_start = self._start_q(start_state)
         sol = self.solver.solve(chain, position, rotation, q_start)
-        self._fill(resp, sol)
+        if resp is not None:
+            self._fill(resp, sol)
         if not sol.success:
-            return
+            return sol, None, sol.message
         gen = MinJerkGenerator(self.model, self.solver.problem(chain).chain, self.mj_config, T)
         gen.reset(q_start)
         if state is not None:
             gen.restore(state)
         gen.set_target(sol.q)
         traj = gen.rollout()
-        msg = arrays_to_trajectory(traj.joint_names, traj.t, traj.q, traj.qd, stamp=now.to_msg())
-        wait = self.node_config.subscriber_timeout
-        listening = subscriber_note(wait_for_subscribers(self.traj_pub, wait), wait)
-        self.traj_pub.publish(msg)
-        self._active = _Active(now, traj, chain, q_start)
-        resp.trajectory = msg
-        resp.message = (
-            f"{sol.message}; trajectory of {len(traj.t)} points over {traj.duration:.2f} s"
-            + (" (continued from the running one)" if state is not None else "")
-            + listening
-        )
+        times, qd = np.asarray(traj.t), np.asarray(traj.qd)
+        rep = self.rate_limits.report(CoreTrajectory(traj.joint_names, times, traj.q, qd))
+        slowed = ""
+        if rep.time_scale > 1.0 + 1e-3:
+            scale = rep.time_scale * 1.01
+            times, qd, _ = scale_trajectory_time(times, qd, None, scale)
+            slowed = (f"; slowed down to the joint limits: {traj.duration:.2f} -> "
+                      f"{traj.duration * scale:.2f} s ({rep.describe()})")
+        msg = arrays_to_trajectory(traj.joint_names, times, traj.q, qd, stamp=now.to_msg())
+        self._active = _Active(now, traj, chain, q_start) if not slowed else None
+        note = (f"{sol.message}; trajectory of {len(times)} points over {times[-1]:.2f} s"
+                + (" (continued from the running one)" if state is not None else "") + slowed)
+        return sol, msg, note
+
+    # ------------------------------------------------------------------ the action
+    def _hands(self, st: MeasuredState) -> dict[str, np.ndarray]:
+        q = self.model.q_from_dict(st.positions, default=self.model.posture("rest"))
+        spec = self.model.spec
+        return {h: self.model.frame_position(q, spec.hand_frame(h)) for h in ("left", "right")}
+
+    async def _execute_go_to_pose(self, handle) -> GoToPoseAction.Result:
+        """/cartesian/go_to_pose_action: solve, execute, judge on the measured robot."""
+        generation = self.execution.preempt_running()
+        req = handle.request
+        res = GoToPoseAction.Result()
+
+        def feedback(phase: str, errors: dict, time_to_go: float, progress: float) -> None:
+            fb = GoToPoseAction.Feedback()
+            fb.phase = phase
+            fb.position_error = float(next(iter(errors.values()), math.nan))
+            fb.time_to_go, fb.progress = float(time_to_go), float(progress)
+            handle.publish_feedback(fb)
+
+        def finish(outcome: str, message: str) -> GoToPoseAction.Result:
+            res.outcome, res.message, res.success = outcome, message, outcome == "reached"
+            if res.success:
+                handle.succeed()
+            elif outcome == "canceled" and handle.is_cancel_requested:
+                handle.canceled()
+            else:
+                handle.abort()
+            text = f"/cartesian/go_to_pose_action: {outcome}: {message}"
+            if res.success:
+                self.get_logger().info(text)
+            else:
+                self.get_logger().warning(text)
+            return res
+
+        feedback("solving", {}, float(req.trajectory_time), 0.0)
+        try:
+            if self.joint_cache.latest() is None:
+                raise InvalidInput("no /joint_states received: the robot's posture is "
+                                   "unknown, nothing can be executed")
+            tol = float(req.arrival_tolerance)
+            if not math.isfinite(tol) or tol < 0:
+                raise InvalidInput(f"arrival_tolerance: expected a finite distance >= 0 m "
+                                   f"(0 = default), got {tol}")
+            chain, position, _ = self._target(req)
+            hand = "left" if "left" in chain else "right"
+            sol, msg, note = self._plan_go_to_pose(req)
+        except IcubPmpError as exc:
+            return finish("rejected", str(exc))
+        except Exception as exc:  # never die on a goal
+            return finish("rejected", f"internal error: {type(exc).__name__}: {exc}")
+        res.solver_position_error = float(sol.position_error)
+        res.solver_orientation_error = float(sol.orientation_error)
+        if msg is None:
+            return finish("unreachable", f"{note}; not executed")
+        res.trajectory = msg
+        res.trajectory_time_used = float(msg.points[-1].time_from_start.sec
+                                         + msg.points[-1].time_from_start.nanosec * 1e-9)
+        nc = self.node_config
+        arrival = ArrivalConfig(arrival_tolerance=tol or nc.arrival_tolerance,
+                                settle_speed=nc.settle_speed, settle_time=nc.settle_time,
+                                settle_timeout=nc.settle_timeout)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = 0, 0  # start when accepted
+        out = await self.execution.run(
+            msg, {hand: position}, arrival, feedback, lambda: handle.is_cancel_requested,
+            generation)
+        if out.arrival is not None:
+            p = out.arrival.positions[hand]
+            res.arrival_position_error = float(out.arrival.errors[hand])
+            res.final_position = Point(x=float(p[0]), y=float(p[1]), z=float(p[2]))
+        res.execution_time = float(out.execution_time)
+        return finish(out.outcome, f"{out.message} (solver: {note})")
 
 
 def main(args: list[str] | None = None) -> None:

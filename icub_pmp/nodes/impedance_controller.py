@@ -9,8 +9,13 @@ publishes  /effort_command (JointState: name + effort [N m]; in lockstep the sta
            from the /joint_states message it answers), /impedance_controller/state (JointState
            every ``state_publish_every`` steps: position = desired q_d, velocity = desired
            q_dot_d, effort = the commanded torque)
+           /impedance_controller/status (icub_interfaces/ControllerStatus, reliable + transient
+           local: status, safe-hold reason, ages, counters; on change and every wall second)
 services   /impedance_controller/hold (std_srvs/Trigger): stop every motion, hold the last
            measured posture
+actions    /impedance_controller/follow_joint_trajectory (icub_interfaces/action/
+           FollowJointTrajectory): execute a trajectory with feedback and a measured result
+           (:class:`~icub_pmp.ros.trajectory_action_server.TrajectoryActionServer`)
 
 Stepping: with ``lockstep`` every /joint_states message is answered at once (with
 ``wait_for_estimate`` only once the estimate of the same stamp has arrived, or after
@@ -18,11 +23,14 @@ Stepping: with ``lockstep`` every /joint_states message is answered at once (wit
 time; otherwise a timer at ``rate_hz`` steps on the latest joint state. Trajectories start
 at their header stamp (0 = now, a past stamp = now) in the time of the joint states. Bad
 input (NaN, unknown joints, non-increasing times, points beyond the joint limits, missing
-joints) is dropped with a warning; the controller keeps running. Watchdogs: a 20 Hz timer on
-the node clock (sim time with ``use_sim_time``) trips the safe hold when no joint state came
-for ``state_timeout``; estimates older than ``estimate_timeout`` switch the torque loop off;
-both are logged. All :class:`ImpedanceControllerConfig` parameters can change at run time
-(validated).
+joints, faster than the joints' velocity/acceleration limits) is dropped with a warning; the
+controller keeps running. Watchdogs: a 20 Hz timer on the node clock (simulated time with
+``use_sim_time``, as the everyday graph runs) trips the safe hold when no joint state came for
+``state_timeout``; a wall-clock timer trips it when none came for ``state_wall_timeout`` of
+wall time (the simulator is paused or gone: simulated time has stopped, so only wall time can
+tell); estimates older than ``estimate_timeout`` switch the torque loop off and none for
+``estimate_lost_timeout`` latches a safe hold. Each is logged once and shown on the status
+topic. All :class:`ImpedanceControllerConfig` parameters can change at run time (validated).
 """
 
 from __future__ import annotations
@@ -34,11 +42,12 @@ from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
+from icub_interfaces.msg import ControllerStatus
 from icub_pmp.control.impedance_controller import ImpedanceController
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
@@ -54,10 +63,13 @@ from icub_pmp.nodes.raw_messages import (
     RawJointStateWriter,
     read_joint_state,
 )
+from icub_pmp.ros.trajectory_action_server import TrajectoryActionServer
 
 __all__ = ["ImpedanceControllerNode", "main"]
 
 _TRAJ_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+_STATUS_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class ImpedanceControllerNode(Node):
@@ -83,6 +95,9 @@ class ImpedanceControllerNode(Node):
         self._latest_new = False
         self._t_last: float | None = None
         self._status = "no_estimate"
+        self._js_wall: float | None = None
+        self._status_sent: tuple | None = None
+        self._status_wall = 0.0
         self.steps = 0
         self.dropped = 0
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -105,7 +120,13 @@ class ImpedanceControllerNode(Node):
         self.create_subscription(JointState, "/impedance_controller/velocity_command",
                                  self._on_velocity, _TRAJ_QOS)
         self.create_service(Trigger, "/impedance_controller/hold", self._on_hold)
+        self.pub_status = self.create_publisher(ControllerStatus, "/impedance_controller/status",
+                                                _STATUS_QOS)
+        self.action = TrajectoryActionServer(self, self.controller, lambda: self._t_last)
         self.create_timer(0.05, self._on_watchdog)
+        # wall-clock watchdog: simulated time stops with the simulator, wall time does not
+        self.create_timer(0.1, self._on_wall_watchdog,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
         # wall-clock timer: a joint state waiting for its estimate is answered without it
         # after estimate_timeout of wall time (the simulator waits for us: sim time stands)
         self._pending_since = 0.0
@@ -163,6 +184,7 @@ class ImpedanceControllerNode(Node):
             self._warn(f"/joint_states dropped: {exc}")
             return
         ns = msg.stamp_ns
+        self._js_wall = time.monotonic()
         sec, nanosec = divmod(ns, 1_000_000_000)
         stamp = Time(sec=sec, nanosec=nanosec)
         cfg = self.controller.config
@@ -234,6 +256,43 @@ class ImpedanceControllerNode(Node):
         self.get_logger().info(response.message)
         return response
 
+    # ------------------------------------------------------------------ status
+    def _publish_status(self, force: bool = False) -> None:
+        c = self.controller
+        reason = c.safe_hold_reason or ""
+        status = "safe_hold" if c.safe_hold else self._status
+        key = (status, reason, len(c.goals))
+        now = time.monotonic()
+        if not force and key == self._status_sent and now - self._status_wall < 1.0:
+            return
+        self._status_sent, self._status_wall = key, now
+        m = ControllerStatus()
+        t = self._t_last or 0.0
+        m.header.stamp.sec = int(t)
+        m.header.stamp.nanosec = int(round((t - int(t)) * 1e9)) % 1_000_000_000
+        m.status = status
+        m.safe_hold_reason = reason
+        m.joint_state_wall_age = -1.0 if self._js_wall is None else now - self._js_wall
+        m.estimate_age = c.estimate_age(t) if self._t_last is not None else -1.0
+        m.steps = self.steps
+        m.stale_estimate_steps = c.stale_estimate_steps
+        m.active_goals = len(c.goals)
+        m.lockstep = c.config.lockstep
+        m.mode = c.config.mode
+        self.pub_status.publish(m)
+
+    def _on_wall_watchdog(self) -> None:
+        timeout = self.controller.config.state_wall_timeout
+        if (timeout > 0 and self._js_wall is not None and not self.controller.safe_hold
+                and time.monotonic() - self._js_wall > timeout):
+            reason = (f"no joint state for {timeout:g} s of wall time: the simulator is "
+                      "paused or gone")
+            self.controller.enter_safe_hold(reason)
+            self.action.resolve()
+            self.get_logger().warning(f"{reason}; safe hold at the last measured posture "
+                                      "(motions aborted)")
+        self._publish_status()
+
     # ------------------------------------------------------------------ stepping
     def _on_timer(self) -> None:
         # free-running: step on the latest joint state; in safe hold, wait for a new one
@@ -255,6 +314,8 @@ class ImpedanceControllerNode(Node):
     def _on_watchdog(self) -> None:
         now = self.get_clock().now().nanoseconds * 1e-9
         if self.controller.check_watchdog(now):
+            self.action.resolve()
+            self._publish_status(force=True)
             self.get_logger().warning(
                 f"no joint state for {self.controller.config.state_timeout} s: safe hold at "
                 "the last measured posture (motions aborted)")
@@ -271,14 +332,19 @@ class ImpedanceControllerNode(Node):
         # serialised directly (raw_messages): the names are encoded once
         self.pub_effort.publish(self._effort_writer.write(
             stamp.sec * 1_000_000_000 + stamp.nanosec, effort=out.tau))
-        if was_safe:
-            self.get_logger().info("joint states are back: holding the measured posture")
+        self.action.resolve(feedback=self.steps % self.controller.config.feedback_every == 0)
+        if was_safe and not self.controller.safe_hold:
+            self.get_logger().info("safe hold released: holding the measured posture")
+        elif self.controller.safe_hold and not was_safe:
+            self.get_logger().warning(f"safe hold: {self.controller.safe_hold_reason}")
+        self._publish_status()
         if out.status != self._status:
+            # throttled: a starved estimator on a loaded machine makes the status flap
             text = f"torque loop: {self._status} -> {out.status}"
             if out.status == "ok":
-                self.get_logger().info(text)
+                self.get_logger().info(text, throttle_duration_sec=5.0)
             else:
-                self.get_logger().warning(text)
+                self.get_logger().warning(text, throttle_duration_sec=5.0)
             self._status = out.status
         every = self.controller.config.state_publish_every
         if every and self.steps % every == 0:

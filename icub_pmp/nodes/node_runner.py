@@ -35,6 +35,11 @@ def spin_node(factory: Callable[[], Node], args: list[str] | None = None) -> Non
             executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        if rclpy.ok():
+            raise
+        # a callback racing the shutdown (e.g. publishing on a context a signal just shut
+        # down): the node is stopping anyway
     finally:
         if node is not None:
             node.destroy_node()
@@ -59,6 +64,11 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
         pass
     except ConfigError as exc:
         raise SystemExit(f"{name}: {exc}") from exc
+    except Exception:
+        if rclpy.ok():
+            raise
+        # a callback racing the shutdown (e.g. publishing on a context a signal just shut
+        # down): the node is stopping anyway
     finally:
         if node is not None:
             node.destroy_node()

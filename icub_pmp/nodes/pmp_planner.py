@@ -1,6 +1,16 @@
 """pmp_planner: the PMP planner (Mohan et al. 2009) as a ROS 2 node.
 
-Service ``/pmp/reach`` (icub_interfaces/srv/Reach): plans the goal with a PMP network from the
+Action ``/pmp/reach_action`` (icub_interfaces/action/Reach): the way to move the robot. Plans
+from the measured /joint_states, slows the plan down to the joints' velocity/acceleration
+limits when needed, executes it through the impedance controller's FollowJointTrajectory
+action, sends feedback (phase, hand errors measured from /joint_states, time to go) and
+answers with the arrival error measured on the robot after the hands settled
+(:class:`~icub_pmp.ros.goal_execution.GoalExecution`). Outcomes: reached, not_reached,
+unreachable (the mental simulation failed: nothing moves), aborted (with the reason: the
+controller's safe hold, a missing controller, a newer goal), canceled, rejected (bad goal).
+
+Service ``/pmp/reach`` (icub_interfaces/srv/Reach), for mental simulation and quick calls:
+plans the goal with a PMP network from the
 request's ``start_state`` (if given; joints it lacks come from the latest /joint_states, else
 the rest posture), else from the latest ``/joint_states``; with neither, from the ``rest``
 posture of config/robot.yaml (parameter ``plan_from_rest_without_state``; the answer's message
@@ -8,10 +18,12 @@ says so and the plan is not executed, since the robot's real posture is unknown)
 success, per-hand residuals (the distance left at tau, Sect. 4) and the planned
 ``trajectory_msgs/JointTrajectory`` (the network's joints, time_from_start 0 .. tau).
 
-A plan is executed, i.e. published on ``/joint_trajectory``, only when the request is not
+A plan is sent, i.e. published on ``/joint_trajectory``, only when the request is not
 ``simulate_only`` and the mental simulation succeeded (Sect. 4: "if the forward simulation is
-successful, the movement is executed"). The predicted hand paths are always published on
-``/pmp/predicted_path/left_hand`` and ``.../right_hand`` (nav_msgs/Path, root_link).
+successful, the movement is executed"); the service does not watch the execution (its answer
+says "sent", never "reached"; use the action for that). The predicted hand paths are always
+published on ``/pmp/predicted_path/left_hand`` and ``.../right_hand`` (nav_msgs/Path,
+root_link).
 
 Target frames: empty or ``root_link``, or any frame of the iCub model (the target is then
 expressed in that frame at the start posture). Bad goals (NaN, unknown hand or frame, tau < 0,
@@ -24,15 +36,20 @@ from __future__ import annotations
 import math
 import time
 
+import numpy as np
 from nav_msgs.msg import Path
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.service_introspection import ServiceIntrospectionState
-from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
+from icub_interfaces.action import Reach as ReachAction
 from icub_interfaces.srv import Reach
+from icub_pmp.control.arrival_monitor import ArrivalConfig
+from icub_pmp.control.joint_trajectory import JointTrajectory as CoreTrajectory
+from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory_time
 from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.nodes.conversions import (
@@ -46,6 +63,8 @@ from icub_pmp.nodes.conversions import (
 from icub_pmp.nodes.node_runner import run_node
 from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
+from icub_pmp.ros.goal_execution import GoalExecution
+from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 
 __all__ = ["PmpPlannerNode", "main"]
 
@@ -58,6 +77,12 @@ NODE_PARAMETERS = {
     "subscriber_timeout": (
         1.0, "[s, wall] wait up to this long for a subscriber on /joint_trajectory before "
              "publishing a plan (discovery right after start-up)"),
+    "controller_timeout": (
+        5.0, "[s, wall] reach action: wait this long for the controller's action server"),
+    "arrival_tolerance": (0.01, "[m] reach action: measured hand error of a reached goal"),
+    "settle_speed": (0.005, "[m/s] reach action: a hand slower than this is still"),
+    "settle_time": (0.2, "[s] reach action: hands still this long after the end = settled"),
+    "settle_timeout": (2.0, "[s] reach action: judge anyway this long after the end"),
 }
 
 
@@ -82,10 +107,8 @@ class PmpPlannerNode(Node):
         self.planner = PmpPlanner(self.config)
         self._names = self.planner.provider.joint_names
         self._valid_state_names = set(self.planner.spec.actuated_joints)
-        self._latest: dict[str, float] | None = None
-        self._latest_time = 0.0
-        self.create_subscription(
-            JointState, "/joint_states", self._on_joint_states, qos_profile_sensor_data)
+        self.joint_states = JointStateCache(self)
+        self.rate_limits = JointRateLimits.from_spec(self.planner.spec)
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self.trajectory_pub = self.create_publisher(JointTrajectory, "/joint_trajectory", reliable)
         self.path_pubs = {
@@ -102,15 +125,30 @@ class PmpPlannerNode(Node):
         # requests and responses on /pmp/reach/_service_event, so bags record reach goals
         srv.configure_introspection(
             self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
-        self.get_logger().info("serving /pmp/reach")
+        icub = self.planner.provider.icub
+        frames = {h: self.planner.spec.hand_frame(h) for h in HANDS}
+
+        def hands(st: MeasuredState) -> dict[str, np.ndarray]:
+            q = icub.q_from_dict(st.positions)
+            return {h: icub.frame_position(q, f) for h, f in frames.items()}
+
+        self.execution = GoalExecution(
+            self, self.joint_states, hands,
+            server_timeout=float(self.get_parameter("controller_timeout").value))
+        self.reach_action = ActionServer(
+            self, ReachAction, "/pmp/reach_action", execute_callback=self._execute_reach,
+            goal_callback=lambda _goal: GoalResponse.ACCEPT,
+            cancel_callback=lambda _handle: CancelResponse.ACCEPT)
+        self.get_logger().info("serving /pmp/reach (service) and /pmp/reach_action (action)")
 
     # ------------------------------------------------------------------ parameters
     @staticmethod
     def _check_node_parameters(values: dict) -> None:
-        for name in ("joint_state_timeout", "subscriber_timeout"):
+        for name in ("joint_state_timeout", "subscriber_timeout", "controller_timeout"):
             t = values.get(name, 0.0)
             if not isinstance(t, float) or not math.isfinite(t) or t < 0:
                 raise ConfigError(f"{name}: expected a float >= 0 s, got {t!r}")
+        ArrivalConfig.from_dict(values, ignore_unknown=True)
 
     def _on_set_parameters(self, params: list) -> SetParametersResult:
         current = {n: self.get_parameter(n).value for n in PmpConfig.field_names()}
@@ -131,22 +169,34 @@ class PmpPlannerNode(Node):
         return SetParametersResult(successful=True)
 
     # ------------------------------------------------------------------ joint states
-    def _on_joint_states(self, msg: JointState) -> None:
-        try:
-            validate_joint_state(msg, valid_names=self._valid_state_names)
-        except IcubPmpError as exc:
-            self.get_logger().warning(f"dropping /joint_states: {exc}", throttle_duration_sec=5.0)
-            return
-        self._latest = joint_state_field(msg)
-        self._latest_time = time.monotonic()
-
     def _current_state(self) -> dict[str, float] | None:
         timeout = float(self.get_parameter("joint_state_timeout").value)
-        if self._latest is None:
+        st = self.joint_states.latest()
+        if st is None:
             return None
-        if timeout > 0 and time.monotonic() - self._latest_time > timeout:
+        if timeout > 0 and self.joint_states.wall_age() > timeout:
             return None
-        return self._latest
+        unknown = set(st.positions) - self._valid_state_names
+        if unknown:
+            self.get_logger().warning(f"dropping /joint_states naming unknown joints "
+                                      f"{sorted(unknown)}", throttle_duration_sec=5.0)
+            return None
+        return st.positions
+
+    def _limited_trajectory(self, plan) -> tuple[JointTrajectory, float, str]:
+        """The plan as a trajectory message within the joints' velocity and acceleration
+        limits: (message, tau used [s], a note when it had to be slowed down)."""
+        times, vel = np.asarray(plan.t), np.asarray(plan.velocities)
+        rep = self.rate_limits.report(
+            CoreTrajectory(plan.joint_names, times, plan.positions, vel))
+        scale, note = rep.time_scale, ""
+        if scale > 1.0 + 1e-3:
+            scale *= 1.01  # a small margin over the sampled peak
+            times, vel, _ = scale_trajectory_time(times, vel, None, scale)
+            note = (f"; slowed down to the joint limits: tau {plan.tau:.3g} -> "
+                    f"{plan.tau * scale:.3g} s ({rep.describe()} at the asked tau)")
+        msg = arrays_to_trajectory(plan.joint_names, times, plan.positions, vel)
+        return msg, float(plan.tau * scale), note
 
     # ------------------------------------------------------------------ service
     def _on_reach(self, req: Reach.Request, res: Reach.Response) -> Reach.Response:
@@ -167,8 +217,7 @@ class PmpPlannerNode(Node):
             return res
         res.hands = list(plan.hands)
         res.residuals = [float(plan.residuals[h]) for h in plan.hands]
-        res.trajectory = arrays_to_trajectory(
-            plan.joint_names, plan.t, plan.positions, plan.velocities)
+        res.trajectory, _, slowed = self._limited_trajectory(plan)
         execute = plan.success and not req.simulate_only and not assumed
         listening = ""
         if execute:
@@ -183,10 +232,11 @@ class PmpPlannerNode(Node):
         if req.simulate_only:
             what = "simulated only"
         elif execute:
-            what = "published on /joint_trajectory" + listening
+            what = ("sent on /joint_trajectory (execution not monitored: the "
+                    "/pmp/reach_action action reports the measured arrival)" + listening)
         else:
             what = "not executed"
-        res.message = f"{plan.message}; {what}{note}"
+        res.message = f"{plan.message}{slowed}; {what}{note}"
         self.get_logger().info(
             f"/pmp/reach {list(plan.hands)}: {res.message} "
             f"[{(time.perf_counter() - t0) * 1e3:.1f} ms with messages]")
@@ -241,6 +291,87 @@ class PmpPlannerNode(Node):
                 orientations[h] = rot
         return ReachGoal(targets=targets, orientations=orientations, use_torso=req.use_torso,
                          tau=req.tau if req.tau > 0 else None)
+
+
+    # ------------------------------------------------------------------ the action
+    async def _execute_reach(self, handle) -> ReachAction.Result:
+        """The /pmp/reach_action goal: plan, execute, judge on the measured robot."""
+        generation = self.execution.preempt_running()
+        req = handle.request
+        res = ReachAction.Result()
+        res.hands = list(req.hands)
+
+        def feedback(phase: str, errors: dict, time_to_go: float, progress: float) -> None:
+            fb = ReachAction.Feedback()
+            fb.phase = phase
+            fb.hands = [h for h in res.hands if h in errors]
+            fb.hand_errors = [float(errors[h]) for h in fb.hands]
+            fb.time_to_go = float(time_to_go)
+            fb.progress = float(progress)
+            handle.publish_feedback(fb)
+
+        def finish(outcome: str, message: str) -> ReachAction.Result:
+            res.outcome, res.message = outcome, message
+            res.success = outcome == "reached"
+            if res.success:
+                handle.succeed()
+            elif outcome == "canceled" and handle.is_cancel_requested:
+                handle.canceled()
+            else:
+                handle.abort()
+            text = f"/pmp/reach_action {res.hands}: {outcome}: {message}"
+            if res.success:
+                self.get_logger().info(text)
+            else:
+                self.get_logger().warning(text)
+            return res
+
+        feedback("planning", {}, float(req.tau), 0.0)
+        try:
+            start = self._current_state()
+            if start is None:
+                raise InvalidInput("no /joint_states received: the robot's posture is "
+                                   "unknown, nothing can be executed")
+            goal = self._goal_of(req, dict(start))
+            tol = float(req.arrival_tolerance)
+            if not math.isfinite(tol) or tol < 0:
+                raise InvalidInput(f"arrival_tolerance: expected a finite distance >= 0 m "
+                                   f"(0 = default), got {tol}")
+            arrival = ArrivalConfig.from_dict(
+                {n: float(self.get_parameter(n).value) for n in ArrivalConfig.field_names()})
+            if tol > 0:
+                arrival = ArrivalConfig.from_dict({**arrival.to_dict(),
+                                                   "arrival_tolerance": tol})
+            plan = self.planner.plan(goal, start)
+        except IcubPmpError as exc:
+            return finish("rejected", str(exc))
+        except Exception as exc:  # never die on a goal
+            return finish("rejected", f"internal error: {type(exc).__name__}: {exc}")
+        res.planned_residuals = [float(plan.residuals[h]) for h in plan.hands]
+        stamp = self.get_clock().now().to_msg()
+        for h in plan.hands:
+            self.path_pubs[h].publish(
+                positions_to_path(plan.hand_paths[h], "root_link", stamp, plan.t))
+        if not plan.success:
+            return finish("unreachable", f"{plan.message}; not executed")
+        traj, res.tau_used, slowed = self._limited_trajectory(plan)
+        res.trajectory = traj
+        out = await self.execution.run(
+            traj, goal.targets, arrival, feedback, lambda: handle.is_cancel_requested,
+            generation)
+        if out.arrival is not None:
+            res.arrival_errors = [float(out.arrival.errors[h]) for h in res.hands]
+            res.final_positions = [_point(out.arrival.positions[h]) for h in res.hands]
+        res.execution_time = float(out.execution_time)
+        return finish(out.outcome, f"{out.message} (planned: residuals "
+                      + ", ".join(f"{h} {plan.residuals[h] * 1e3:.2f} mm" for h in plan.hands)
+                      + f"{slowed})")
+
+
+def _point(p: np.ndarray):
+    from geometry_msgs.msg import Point
+
+    return Point(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
 def main(args: list[str] | None = None) -> None:

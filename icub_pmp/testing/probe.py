@@ -81,6 +81,9 @@ class RosProbe:
                       Publisher: self.node.destroy_publisher, Client: self.node.destroy_client,
                       Service: self.node.destroy_service, Timer: self.node.destroy_timer}
         for entity in entities:
+            if type(entity).__name__ == "ActionClient":
+                self._on_spin_thread(entity.destroy)
+                continue
             fn = next((f for cls, f in destroyers.items() if isinstance(entity, cls)), None)
             if fn is None:
                 raise TypeError(f"RosProbe.destroy: cannot destroy {type(entity).__name__}")
@@ -160,6 +163,38 @@ class RosProbe:
             return future.result()
         finally:
             self.destroy(client)
+
+    def action_client(self, action: str, action_type: Any, timeout: float = 30.0) -> Any:
+        """An ActionClient of this probe's node, once its server is ready (raises
+        TimeoutError). Reuse it for several goals; destroy it with :meth:`destroy`."""
+        from rclpy.action import ActionClient
+
+        client = ActionClient(self.node, action_type, action)
+        if not self.wait_for(client.server_is_ready, timeout):
+            self.destroy(client)
+            raise TimeoutError(f"action {action} not available after {timeout} s")
+        return client
+
+    def send_goal(self, client: Any, goal: Any, timeout: float = 60.0,
+                  feedback: list | None = None, on_accepted: Callable[[Any], None] | None = None
+                  ) -> Any:
+        """Send ``goal`` with ``client`` (:meth:`action_client`) and wait for the result
+        (``GetResult`` response: ``.status``, ``.result``); feedback messages are appended to
+        ``feedback``; ``on_accepted(goal_handle)`` runs once accepted (e.g. to cancel it or
+        to kill a node mid-motion). Raises TimeoutError."""
+        cb = (lambda m: feedback.append(m.feedback)) if feedback is not None else None
+        sent = client.send_goal_async(goal, feedback_callback=cb)
+        if not self.wait_for(sent.done, 30.0):
+            raise TimeoutError("the goal was not acknowledged within 30 s")
+        handle = sent.result()
+        if not handle.accepted:
+            raise RuntimeError("goal rejected")
+        if on_accepted is not None:
+            on_accepted(handle)
+        result = handle.get_result_async()
+        if not self.wait_for(result.done, timeout):
+            raise TimeoutError(f"no result within {timeout} s")
+        return result.result()
 
     def close(self) -> None:
         """Stop spinning and shut the context down."""

@@ -1,0 +1,248 @@
+"""GoalExecution: the execution half of a Cartesian goal action (pmp_planner's reach,
+cartesian_solver's go-to-pose), shared by both nodes.
+
+Given a planned ``trajectory_msgs/JointTrajectory`` and the hand targets, :meth:`run` (a
+coroutine, awaited from an action server's execute callback):
+
+1. sends the trajectory to the impedance controller's FollowJointTrajectory action and waits
+   for it to be accepted (a missing controller is an abort with a clear reason);
+2. while the controller executes it, publishes feedback about every ``feedback_period`` s:
+   the phase, the hands' distances to their targets measured from /joint_states (forward
+   kinematics of the measured joints), the time to go;
+3. honours a cancel request (the controller holds the measured posture) and a preemption by a
+   newer goal of the same server;
+4. after the controller's result, waits until the hands have settled
+   (:class:`~icub_pmp.control.arrival_monitor.ArrivalMonitor`) and judges the arrival on the
+   measured hands.
+
+Everything runs on the node's executor thread: waiting is done by awaiting futures that a
+wall-clock timer completes (no blocking, no extra threads).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Callable, Mapping, NamedTuple
+
+import numpy as np
+from rclpy.action import ActionClient
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.task import Future
+from trajectory_msgs.msg import JointTrajectory
+
+from icub_interfaces.action import FollowJointTrajectory
+from icub_pmp.control.arrival_monitor import Arrival, ArrivalConfig, ArrivalMonitor
+from icub_pmp.control.trajectory_goal import GoalCode
+from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
+
+__all__ = ["GoalExecution", "ExecutionOutcome", "CONTROLLER_ACTION"]
+
+#: the impedance controller's trajectory-execution action
+CONTROLLER_ACTION = "/impedance_controller/follow_joint_trajectory"
+
+_CODE_NAMES = {v: k for k, v in vars(GoalCode).items() if isinstance(v, int)}
+
+
+class ExecutionOutcome(NamedTuple):
+    """How an executed goal ended: ``outcome`` (reached | not_reached | aborted | canceled),
+    a one-line ``message``, the arrival judgement (None when the motion did not complete) and
+    the execution time from sending to the judgement [s, joint states' clock]."""
+
+    outcome: str
+    message: str
+    arrival: Arrival | None
+    execution_time: float
+
+    @property
+    def success(self) -> bool:
+        return self.outcome == "reached"
+
+
+FeedbackFn = Callable[[str, Mapping[str, float], float, float], None]
+HandsFn = Callable[[MeasuredState], Mapping[str, np.ndarray]]
+
+
+class GoalExecution:
+    """Execution of planned trajectories for one action server of ``node``.
+
+    ``hands``: measured state -> {hand: (3,) position [m]} (forward kinematics);
+    ``server_timeout``: wall time to wait for the controller's action server (and after
+    which a vanished server aborts the goal) [s]; ``stale_timeout``: wall time without
+    joint states that aborts a running goal [s].
+    """
+
+    def __init__(self, node: Node, joint_states: JointStateCache, hands: HandsFn,
+                 action: str = CONTROLLER_ACTION, server_timeout: float = 5.0,
+                 feedback_period: float = 0.1, stale_timeout: float = 5.0,
+                 callback_group=None):
+        self.node = node
+        self.joint_states = joint_states
+        self.hands = hands
+        self.server_timeout = float(server_timeout)
+        self.feedback_period = float(feedback_period)
+        self.stale_timeout = float(stale_timeout)
+        self.client = ActionClient(node, FollowJointTrajectory, action,
+                                   callback_group=callback_group)
+        self._ticks: list[Future] = []
+        self._generation = 0
+        node.create_timer(0.02, self._on_tick, callback_group=callback_group,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    # ------------------------------------------------------------------ waiting
+    def _on_tick(self) -> None:
+        ticks, self._ticks = self._ticks, []
+        for f in ticks:
+            if not f.done():
+                f.set_result(None)
+
+    async def sleep(self) -> None:
+        """Yield to the executor until the next tick (about 20 ms of wall time)."""
+        f = Future()
+        self._ticks.append(f)
+        await f
+
+    def preempt_running(self) -> int:
+        """Mark every running :meth:`run` as preempted by a newer goal; returns the new
+        generation (pass it to :meth:`run`)."""
+        self._generation += 1
+        return self._generation
+
+    # ------------------------------------------------------------------ the run
+    async def run(self, trajectory: JointTrajectory, targets: Mapping[str, np.ndarray],
+                  arrival: ArrivalConfig, feedback: FeedbackFn,
+                  cancel_requested: Callable[[], bool], generation: int,
+                  goal_tolerance: float = 0.0) -> ExecutionOutcome:
+        """Execute ``trajectory`` and judge the arrival of ``targets`` (see module doc).
+
+        ``feedback(phase, hand_errors, time_to_go, progress)`` is called about every
+        ``feedback_period`` s; ``cancel_requested()`` is polled; ``generation`` is the value
+        :meth:`preempt_running` returned for this goal (a newer one preempts it)."""
+        t_start = self._sim_now()
+        start_wall = time.monotonic()
+        while not self.client.server_is_ready():
+            if time.monotonic() - start_wall > self.server_timeout:
+                return ExecutionOutcome(
+                    "aborted", f"the controller's action {self.client._action_name} is not "
+                    f"available after {self.server_timeout:g} s (is impedance_controller "
+                    f"running?)", None, 0.0)
+            await self.sleep()
+        goal = FollowJointTrajectory.Goal()
+        goal.trajectory = trajectory
+        if goal_tolerance > 0:
+            goal.goal_tolerance = [float(goal_tolerance)]
+        sent = self.client.send_goal_async(goal)
+        while not sent.done():
+            await self.sleep()
+        handle = sent.result()
+        if handle is None or not handle.accepted:
+            return ExecutionOutcome("aborted", "the controller rejected the trajectory", None,
+                                    0.0)
+        result_future = handle.get_result_async()
+        duration = _duration(trajectory)
+        monitor = ArrivalMonitor(targets, arrival)
+        t0 = self._sim_now() if t_start is None else t_start
+        last_fb = 0.0
+        canceled = preempted = False
+        gone_since: float | None = None
+        while not result_future.done():
+            # the controller's server gone (node killed): its result will never come
+            if not self.client.server_is_ready():
+                gone_since = gone_since or time.monotonic()
+                if time.monotonic() - gone_since > self.server_timeout:
+                    return ExecutionOutcome(
+                        "aborted", "impedance_controller is gone (its action server "
+                        f"disappeared for {self.server_timeout:g} s): the motion's state is "
+                        "unknown", self._judge_now(monitor), 0.0)
+            else:
+                gone_since = None
+            if self.joint_states.wall_age() > self.stale_timeout:
+                return ExecutionOutcome(
+                    "aborted", f"no /joint_states for {self.stale_timeout:g} s of wall time "
+                    "(simulator paused or gone)", self._judge_now(monitor), 0.0)
+            if cancel_requested() and not canceled:
+                canceled = True
+                handle.cancel_goal_async()
+            if generation != self._generation and not preempted:
+                preempted = True  # the newer goal's trajectory takes the joints over
+            now = time.monotonic()
+            if now - last_fb >= self.feedback_period:
+                last_fb = now
+                st = self._observe(monitor)
+                if st is not None and t0 is not None:
+                    elapsed = st.t - t0
+                    feedback("executing", monitor.errors, max(0.0, duration - elapsed),
+                             min(1.0, elapsed / duration) if duration > 0 else 1.0)
+            await self.sleep()
+        res = result_future.result()
+        code = res.result.error_code if res is not None else GoalCode.INVALID_GOAL
+        text = res.result.error_string if res is not None else "no result"
+        t_end = self._sim_now()
+        elapsed = (t_end - t0) if (t_end is not None and t0 is not None) else 0.0
+        if canceled or code == GoalCode.CANCELED:
+            return ExecutionOutcome("canceled", "canceled: the arms hold where they are",
+                                    self._judge_now(monitor), elapsed)
+        if preempted or generation != self._generation:
+            return ExecutionOutcome("aborted", "preempted by a new goal", None, elapsed)
+        if code not in (GoalCode.SUCCESSFUL, GoalCode.GOAL_TOLERANCE_VIOLATED):
+            name = _CODE_NAMES.get(code, str(code))
+            return ExecutionOutcome("aborted", f"the controller aborted the motion ({name}): "
+                                    f"{text}", self._judge_now(monitor), elapsed)
+        # settle, then judge on the measured hands
+        monitor.set_end(t_end if t_end is not None else math.inf)
+        settle_wall = time.monotonic()
+        while True:
+            st = self._observe(monitor)
+            if monitor.settled():
+                break
+            if cancel_requested():
+                return ExecutionOutcome("canceled", "canceled while settling",
+                                        self._judge_now(monitor), elapsed)
+            if generation != self._generation:
+                return ExecutionOutcome("aborted", "preempted by a new goal", None, elapsed)
+            if st is None or time.monotonic() - settle_wall > 4 * arrival.settle_timeout + 10:
+                return ExecutionOutcome(
+                    "aborted", "no joint states while settling (simulator paused or gone?)",
+                    self._judge_now(monitor), elapsed)
+            now = time.monotonic()
+            if now - last_fb >= self.feedback_period:
+                last_fb = now
+                feedback("settling", monitor.errors, 0.0, 1.0)
+            await self.sleep()
+        verdict = monitor.judge()
+        t_fin = self._sim_now()
+        elapsed = (t_fin - t0) if (t_fin is not None and t0 is not None) else elapsed
+        errs = ", ".join(f"{h} {e * 1e3:.1f} mm" for h, e in verdict.errors.items())
+        if verdict.reached:
+            return ExecutionOutcome("reached", f"reached: measured arrival error {errs}",
+                                    verdict, elapsed)
+        extra = "" if code == GoalCode.SUCCESSFUL else f" (controller: {text})"
+        return ExecutionOutcome(
+            "not_reached", f"not reached: measured arrival error {errs} (tolerance "
+            f"{arrival.arrival_tolerance * 1e3:.1f} mm){extra}", verdict, elapsed)
+
+    # ------------------------------------------------------------------ helpers
+    def _sim_now(self) -> float | None:
+        st = self.joint_states.latest()
+        return None if st is None else st.t
+
+    def _observe(self, monitor: ArrivalMonitor) -> MeasuredState | None:
+        st = self.joint_states.latest()
+        if st is not None:
+            monitor.update(st.t, self.hands(st))
+        return st
+
+    def _judge_now(self, monitor: ArrivalMonitor) -> Arrival | None:
+        self._observe(monitor)
+        try:
+            return monitor.judge()
+        except Exception:
+            return None
+
+
+def _duration(traj: JointTrajectory) -> float:
+    if not traj.points:
+        return 0.0
+    d = traj.points[-1].time_from_start
+    return d.sec + d.nanosec * 1e-9
