@@ -241,13 +241,23 @@ def test_runtime_parameters_and_velocity_command(graph, probe):
 
 
 def test_hold_service_and_estimate_watchdog(graph, probe):
-    """/impedance_controller/hold answers success; killing the estimator trips the estimate
-    watchdog (logged 'estimate_stale') while the controller keeps answering the simulator."""
+    """/impedance_controller/hold answers success; killing the estimator latches a safe hold
+    within estimate_lost_timeout (0.5 s of simulated time), said in the log and on the
+    latched status topic, while the controller keeps answering the simulator."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    from icub_interfaces.msg import ControllerStatus
+
     resp = probe.call("/impedance_controller/hold", Trigger, Trigger.Request())
     assert resp.success, resp.message
     graph.kill("wrench_estimator")
     ctl = graph.procs["impedance_controller"]
-    assert ctl.wait_for_output("estimate_stale", 60.0), ctl.output()[-3000:]
+    assert ctl.wait_for_output("estimator lost", 60.0), ctl.output()[-3000:]
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    status = probe.collect("/impedance_controller/status", ControllerStatus, 1, 30.0, latched)
+    assert status and status[0].status == "safe_hold", status
+    assert "estimator lost" in status[0].safe_hold_reason
     n = len(probe.collect("/effort_command", JointState, 20, 30.0))
     assert n == 20
 
@@ -261,8 +271,10 @@ def test_joint_state_watchdog_trips_safe_hold():
 
 
 def _watchdog(did: int) -> None:
+    # wall clock: the probe feeds wall-stamped joint states and there is no /clock
     proc = NodeProcess(command=[str(repo_root() / "scripts/impedance_controller.sh"),
-                                "--ros-args", "-p", "lockstep:=false"],
+                                "--ros-args", "-p", "lockstep:=false", "-p",
+                                "use_sim_time:=false"],
                        env=ros_environment(did))
     probe = RosProbe(did, "watchdog_probe")
     try:

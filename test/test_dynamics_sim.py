@@ -31,7 +31,7 @@ def _force_ok(est: np.ndarray, truth: np.ndarray) -> bool:
 
 
 def test_ft_prediction_during_contact_free_motion(sim):
-    """Table 1 analogue: both arms move periodically (10 joints, 0.37-0.71 Hz, 10-30 deg) with
+    """Table 1 analogue: both arms move periodically (10 joints, 0.37-0.71 Hz, 10-20 deg) with
     no contact; the FT wrench predicted by RNEA with null hand wrenches matches the measured
     one: |mean error| < 0.02 N / 0.005 N m and std < 0.15 N / 0.05 N m per axis (measured
     here: std <= 0.06 N and 0.025 N m), and no contact is flagged."""

@@ -91,14 +91,14 @@ def track_min_jerk(
 
 def start_periodic_motion(loop: SimLoop, duration: float) -> float:
     """Start a contact-free periodic motion of both arms from the raised posture: 10 joints
-    (shoulder pitch/roll/yaw, elbow, prosup), 10-30 deg at 0.37-0.71 Hz, faded in over 1 s
+    (shoulder pitch/roll/yaw, elbow, prosup), 10-20 deg at 0.37-0.71 Hz, faded in over 1 s
     (minimum-jerk envelope), sent as points every 20 ms. Returns its start time [s]."""
     c = loop.controller
     names = [f"{s}_{j}" for s in "lr" for j in
              ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow", "wrist_prosup")]
     idx = c.indices(names)
     q0 = loop.sim.joint_state().position[idx].copy()
-    amp = np.radians([15, 10, 15, 20, 30] * 2)
+    amp = np.radians([15, 10, 15, 20, 20] * 2)  # peak speeds up to 84 deg/s (limit 100)
     freq = np.array([0.5, 0.37, 0.61, 0.53, 0.71, 0.47, 0.41, 0.59, 0.51, 0.67])
     ts = np.arange(1, int(round(duration / 0.02)) + 1) * 0.02
     r = np.clip(ts / 1.0, 0.0, 1.0)

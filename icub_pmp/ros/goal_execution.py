@@ -191,7 +191,6 @@ class GoalExecution:
                                     f"{text}", self._judge_now(monitor), elapsed)
         # settle, then judge on the measured hands
         monitor.set_end(t_end if t_end is not None else math.inf)
-        settle_wall = time.monotonic()
         while True:
             st = self._observe(monitor)
             if monitor.settled():
@@ -201,10 +200,11 @@ class GoalExecution:
                                         self._judge_now(monitor), elapsed)
             if generation != self._generation:
                 return ExecutionOutcome("aborted", "preempted by a new goal", None, elapsed)
-            if st is None or time.monotonic() - settle_wall > 4 * arrival.settle_timeout + 10:
+            if st is None or self.joint_states.wall_age() > self.stale_timeout:
                 return ExecutionOutcome(
-                    "aborted", "no joint states while settling (simulator paused or gone?)",
-                    self._judge_now(monitor), elapsed)
+                    "aborted", f"no /joint_states for {self.stale_timeout:g} s of wall time "
+                    "while settling (simulator paused or gone)", self._judge_now(monitor),
+                    elapsed)
             now = time.monotonic()
             if now - last_fb >= self.feedback_period:
                 last_fb = now
