@@ -1,0 +1,241 @@
+"""ImaginedCollisionCheck: mental simulation of two arm reaches, their collisions and schedule.
+
+Bhat and Mohan 2018, "Coupled interaction between internal models of body and space": each
+robot imagines its reach with its PMP body model; "the 3D locations of the two distal joints
+(nearest to the end-effector) of both the robots are computed at multiple points along the
+two anticipated motion trajectories ... If the calculated distance between the joints ... is
+below a threshold value any time during simulated motion, a possible collision is
+detected". Without a collision both motions run in parallel; with one they are serialised:
+"alternately allowing one of the robots to complete its movement (a sub-task) while keeping
+the other robot away from the shared workspace area at an initialized location".
+
+On the iCub the two arms are the two agents (the trunk, which both would move, stays still:
+``use_torso`` false in every imagined reach). Two iCub arms can also hit each other with the
+forearm or upper arm, which two separate robots could not, so besides the paper's distal
+test each arm's link capsules (:class:`ArmBodyModel`) are compared with the other arm's.
+
+Steps of :meth:`ImaginedCollisionCheck.plan_pair`:
+
+1. imagine each arm's reach from the start posture (:class:`~icub_pmp.pmp.PmpPlanner` on the
+   body model: the URDF now, a learned body schema later);
+2. sample both motions on a common clock every ``check_period`` (an arm that finished holds
+   its final posture) and compare them (:meth:`compare`): distal test and capsule test;
+3. clear: a parallel schedule; else serial: the first arm reaches while the second holds its
+   posture, or, when that posture is in the way, first moves to the safe posture
+   (``safe_posture`` of ``config/robot.yaml``); then the second reaches (re-imagined from
+   the safe posture when it went there), after the first moved to the safe posture if its
+   final posture is in the way. Every step is checked the same way.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from icub_pmp.errors import InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
+from icub_pmp.peripersonal.arm_body_model import ArmBodyModel
+from icub_pmp.peripersonal.collision_check_config import CollisionCheckConfig
+from icub_pmp.peripersonal.collision_verdict import CollisionVerdict
+from icub_pmp.peripersonal.growing_neural_gas import as_points
+from icub_pmp.peripersonal.pair_plan import PairPlan, PairSchedule, ScheduleStep
+from icub_pmp.peripersonal.segment_distance import segment_distance
+from icub_pmp.pmp.pmp_planner import PmpPlanner
+from icub_pmp.pmp.reach_goal import ReachGoal
+from icub_pmp.pmp.reach_plan import ReachPlan
+from icub_pmp.pmp.time_base_generator import TimeBaseGenerator
+
+__all__ = ["ImaginedCollisionCheck", "ArmMotion"]
+
+#: an arm's motion: (times (N,) [s], joint names (n,), positions (N, n) [rad])
+ArmMotion = tuple[np.ndarray, Sequence[str], np.ndarray]
+
+
+def _other(arm: str) -> str:
+    return "right" if arm == "left" else "left"
+
+
+class ImaginedCollisionCheck:
+    """Imagined reaches of both arms, their collision verdict and schedule (module doc).
+
+    Args:
+        config: thresholds, timing, safe posture (:class:`CollisionCheckConfig`).
+        planner: the PMP planner on the body model (default: URDF through pinocchio).
+        body: the arms' distal frames and capsules (default: fitted to the URDF meshes).
+    """
+
+    def __init__(self, config: CollisionCheckConfig | None = None,
+                 planner: PmpPlanner | None = None, body: ArmBodyModel | None = None):
+        self.config = config or CollisionCheckConfig()
+        self.planner = planner or PmpPlanner()
+        self.spec: RobotSpec = self.planner.spec
+        self.provider = self.planner.provider
+        c = self.config
+        self.body = body or ArmBodyModel.from_urdf(self.provider, self.spec, c.capsule_links,
+                                                   c.distal_frames)
+        self._names = self.provider.joint_names
+        self._arm_idx = {a: np.array([self._names.index(j) for j in self.spec.arm_joints(a)])
+                         for a in HANDS}
+        park = self.spec.posture(c.safe_posture)  # raises UnknownName for a bad posture
+        self._park = {a: np.array([park.get(j, 0.0) for j in self.spec.arm_joints(a)])
+                      for a in HANDS}
+
+    # ------------------------------------------------------------------ inputs
+    def _targets(self, targets: Mapping[str, object]) -> dict[str, np.ndarray]:
+        if not isinstance(targets, Mapping):
+            raise InvalidInput(f"targets: expected {{arm: (3,) point}}, got {targets!r}")
+        for a in targets:
+            if a not in HANDS:
+                raise UnknownName("arm", a, HANDS)
+        missing = [a for a in HANDS if a not in targets]
+        if missing:
+            raise InvalidInput(f"targets: a target for each arm is needed, missing {missing}")
+        return {a: as_points(targets[a], f"targets[{a!r}]")[0] for a in HANDS}
+
+    def safe_posture(self, arm: str) -> np.ndarray:
+        """Joint angles (7,) [rad] of ``arm`` at the safe posture."""
+        if arm not in HANDS:
+            raise UnknownName("arm", arm, HANDS)
+        return self._park[arm].copy()
+
+    # ------------------------------------------------------------------ imagination
+    def imagine(self, arm: str, target: object, q_start: np.ndarray | Mapping[str, float] | None
+                = None) -> ReachPlan:
+        """Imagined PMP reach of ``arm`` to ``target`` (3,) [m, root_link] from ``q_start``
+        (full configuration or {joint: angle}; default the rest posture), trunk still."""
+        if arm not in HANDS:
+            raise UnknownName("arm", arm, HANDS)
+        p = as_points(target, "target")[0]
+        goal = ReachGoal(targets={arm: p}, use_torso=False, tau=self.config.reach_tau)
+        return self.planner.plan(goal, q_start)
+
+    def park_motion(self, arm: str, q_from: np.ndarray) -> ArmMotion:
+        """Minimum-jerk joint motion (the TBG profile) of ``arm`` from its joints in the full
+        configuration ``q_from`` to the safe posture in ``park_duration``."""
+        c = self.config
+        tbg = TimeBaseGenerator(c.park_duration)
+        t = tbg.sample_times(self.planner.config.sample_period)
+        q0 = np.asarray(q_from, dtype=float)[self._arm_idx[arm]]
+        d = self._park[arm] - q0
+        pos = q0 + tbg.xi(t)[:, None] * d
+        return t, self.spec.arm_joints(arm), pos
+
+    # ------------------------------------------------------------------ the check
+    def compare(self, q_base: np.ndarray, motions: Mapping[str, ArmMotion]) -> CollisionVerdict:
+        """Compare the two arms while they move as ``motions`` {arm: (t, names, positions)}
+        from the same instant (an arm without a motion, or after its motion ended, holds
+        its joints of ``q_base`` (nq,) [rad] resp. its last sample)."""
+        c = self.config
+        q_base = np.asarray(q_base, dtype=float)
+        if q_base.shape != (len(self._names),) or not np.all(np.isfinite(q_base)):
+            raise InvalidInput(f"q_base: expected finite ({len(self._names)},) [rad], got "
+                               f"{q_base.shape}")
+        t_end = max([float(m[0][-1]) for m in motions.values()], default=0.0)
+        grid = np.unique(np.r_[np.arange(0.0, t_end, c.check_period), t_end])
+        Q = np.repeat(q_base[None], len(grid), axis=0)
+        for arm, (t, names, pos) in motions.items():
+            if arm not in HANDS:
+                raise UnknownName("arm", arm, HANDS)
+            t = np.asarray(t, dtype=float)
+            pos = np.asarray(pos, dtype=float)
+            for j, name in enumerate(names):
+                Q[:, self._names.index(name)] = np.interp(grid, t, pos[:, j])
+        b = self.body
+        dl, dr = b.distal_points("left", Q), b.distal_points("right", Q)
+        dd = np.linalg.norm(dl[:, :, None, :] - dr[:, None, :, :], axis=3)  # (K, D, D)
+        dmin_k = dd.reshape(len(grid), -1).min(axis=1)
+        k_d = int(np.argmin(dmin_k))
+        min_distal = float(dmin_k[k_d])
+        distal_hit = bool(min_distal < c.distal_threshold)
+        if c.body_check:
+            cl, cr = b.capsules_at("left", Q), b.capsules_at("right", Q)
+            gap = segment_distance(cl[:, :, None, 0], cl[:, :, None, 1], cr[:, None, :, 0],
+                                   cr[:, None, :, 1])
+            gap = gap - b.radii("left")[None, :, None] - b.radii("right")[None, None, :]
+            flat = gap.reshape(len(grid), -1)
+            k_c = int(np.argmin(flat.min(axis=1)))
+            i, j = np.unravel_index(int(np.argmin(flat[k_c])), gap.shape[1:])
+            min_clear = float(gap[k_c, i, j])
+            body_hit = bool(min_clear < c.margin)
+            links = (b.capsule_names("left")[i], b.capsule_names("right")[j])
+            t_close = float(grid[k_c])
+        else:
+            min_clear, body_hit = float("inf"), False
+            i, j = np.unravel_index(int(np.argmin(dd[k_d])), dd.shape[1:])
+            links = (b.distal_frames["left"][i], b.distal_frames["right"][j])
+            t_close = float(grid[k_d])
+        return CollisionVerdict(distal_hit or body_hit, distal_hit, body_hit, min_distal,
+                                min_clear, t_close, links)
+
+    @staticmethod
+    def _motion(plan: ReachPlan) -> ArmMotion:
+        return plan.t, plan.joint_names, plan.positions
+
+    def _step(self, arm: str, action: str, start: float, motion: ArmMotion,
+              verdict: CollisionVerdict) -> ScheduleStep:
+        t, names, pos = motion
+        pos = np.asarray(pos, dtype=float)
+        vel = np.gradient(pos, t, axis=0) if len(t) > 1 else np.zeros_like(pos)
+        vel[0] = vel[-1] = 0.0
+        return ScheduleStep(arm, action, float(start), tuple(names), np.asarray(t, float), pos,
+                            vel, verdict)
+
+    # ------------------------------------------------------------------ pairs
+    def plan_pair(self, targets: Mapping[str, object],
+                  q_start: np.ndarray | Mapping[str, float] | None = None,
+                  first: str | None = None) -> PairPlan:
+        """Imagine both reaches to ``targets`` {'left': (3,), 'right': (3,)} [m, root_link]
+        from ``q_start`` and schedule them (module doc). ``first``: the arm that goes first
+        when they must be serialised (default: left)."""
+        t0 = time.perf_counter()
+        goals = self._targets(targets)
+        first = first or "left"
+        if first not in HANDS:
+            raise UnknownName("arm", first, HANDS)
+        q0 = self.planner.start_configuration(q_start)
+        plans = {a: self.imagine(a, goals[a], q0) for a in HANDS}
+        verdict = self.compare(q0, {a: self._motion(p) for a, p in plans.items()})
+        if not verdict.collides:
+            steps = tuple(self._step(a, "reach", 0.0, self._motion(plans[a]), verdict)
+                          for a in HANDS)
+            schedule = PairSchedule("parallel", steps, max(s.end for s in steps), True)
+        else:
+            schedule = self._serial(first, goals, plans, q0)
+        return PairPlan(plans, verdict, schedule, time.perf_counter() - t0)
+
+    def _serial(self, first: str, goals: dict[str, np.ndarray], plans: dict[str, ReachPlan],
+                q0: np.ndarray) -> PairSchedule:
+        """One arm after the other, the waiting one at the safe posture when in the way."""
+        second = _other(first)
+        steps: list[ScheduleStep] = []
+        q = q0.copy()
+        t = 0.0
+        # 1. the first arm's reach against the second arm where it is
+        mf = self._motion(plans[first])
+        v = self.compare(q, {first: mf})
+        if v.collides:  # the second arm is in the way: it goes to the safe posture first
+            park = self.park_motion(second, q)
+            steps.append(self._step(second, "park", t, park, self.compare(q, {second: park})))
+            t = steps[-1].end
+            q[self._arm_idx[second]] = park[2][-1]
+            v = self.compare(q, {first: mf})
+        steps.append(self._step(first, "reach", t, mf, v))
+        t = steps[-1].end
+        q[self._arm_idx[first]] = mf[2][-1]
+        # 2. the second arm's reach (re-imagined if it moved) against the first arm's posture
+        plan2 = plans[second]
+        if steps[0].action == "park":
+            plan2 = self.imagine(second, goals[second], q)
+        m2 = self._motion(plan2)
+        v2 = self.compare(q, {second: m2})
+        if v2.collides:  # the first arm's final posture is in the way: it leaves first
+            park = self.park_motion(first, q)
+            steps.append(self._step(first, "park", t, park, self.compare(q, {first: park})))
+            t = steps[-1].end
+            q[self._arm_idx[first]] = park[2][-1]
+            v2 = self.compare(q, {second: m2})
+        steps.append(self._step(second, "reach", t, m2, v2))
+        safe = not any(s.clearance.collides for s in steps)
+        return PairSchedule("serial", tuple(steps), steps[-1].end, safe)
