@@ -10,6 +10,7 @@ from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.peripersonal import (
     CollisionCheckConfig,
     ImaginedCollisionCheck,
+    LinkHull,
     fit_capsule,
     fit_capsules,
     segment_distance,
@@ -66,18 +67,52 @@ def test_capsules_bound_the_points():
     assert inside.all()
 
 
+def _box(half: tuple[float, float, float]) -> np.ndarray:
+    return np.array([[sx * half[0], sy * half[1], sz * half[2]] for sx in (-1, 1)
+                     for sy in (-1, 1) for sz in (-1, 1)])
+
+
+def _rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def test_link_hull_distance_of_two_boxes():
+    """Two boxes of half size 5 x 3 x 2 cm, the second 14 cm further along x and turned
+    about z: the sampled hull distance equals the true gap (face to face: 4 cm; turned by
+    90 deg: 14 - 5 - 3 = 6 cm) within the sampling spacing, and a bound below it gives inf."""
+    a = LinkHull("a", _box((0.05, 0.03, 0.02)), spacing=0.005)
+    b = LinkHull("b", _box((0.05, 0.03, 0.02)), spacing=0.005)
+    eye, p0, p1 = np.eye(3), np.zeros(3), np.array([0.14, 0.0, 0.0])
+    assert a.distance(eye, p0, b, eye, p1) == pytest.approx(0.04, abs=0.003)
+    assert a.distance(eye, p0, b, _rot_z(np.pi / 2), p1) == pytest.approx(0.06, abs=0.003)
+    assert a.distance(_rot_z(0.3), p0, b, eye, p0) < 0.003  # overlapping: surfaces cross
+    assert a.distance(eye, p0, b, eye, p1, bound=0.03) == np.inf
+    assert len(a.points) > 8 and np.abs(a.points).max(axis=0) == pytest.approx(
+        [0.05, 0.03, 0.02])
+
+
 @pytest.fixture(scope="module")
 def check():
     return ImaginedCollisionCheck()
 
 
 def test_capsules_cover_the_arm_links(check):
-    """Every link that collides in the simulator has capsules in both arms, of about the same
-    total volume on both sides (the arms are mirror images)."""
+    """Every link that collides in the simulator has a hull and capsules in both arms, of
+    about the same total volume on both sides (the arms are mirror images), and the capsules
+    contain their hull."""
     volume = {}
     for arm, p in (("left", "l_"), ("right", "r_")):
         names = set(check.body.capsule_names(arm))
         assert names == {p + n for n in check.config.capsule_links}
+        assert check.body.link_names(arm) == tuple(p + n for n in check.config.capsule_links)
+        for i, hull in enumerate(check.body.hulls[arm]):
+            inside = np.zeros(len(hull.points), dtype=bool)
+            for c in np.flatnonzero(check.body.capsule_links(arm) == i):
+                cap = check.body.capsules[arm][c]
+                inside |= segment_distance(cap.a, cap.b, hull.points, hull.points) <= \
+                    cap.radius + 1e-9
+            assert inside.all(), hull.frame
         assert np.all(check.body.radii(arm) > 0.01) and np.all(check.body.radii(arm) < 0.08)
         volume[arm] = sum(c.volume for c in check.body.capsules[arm])
     assert volume["left"] == pytest.approx(volume["right"], rel=0.15)
@@ -90,7 +125,8 @@ def test_crossing_reaches_collide_and_are_serialised(check):
     pair = check.plan_pair(CROSSING)
     v = pair.verdict
     assert v.collides and v.distal_hit and v.body_hit
-    assert v.min_clearance < 0 and 0.0 < v.time_of_closest_approach <= check.config.reach_tau
+    assert v.min_clearance < check.config.margin
+    assert 0.0 < v.time_of_closest_approach <= check.config.reach_tau
     assert all(p.success for p in pair.plans.values())
     s = pair.schedule
     assert s.mode == "serial" and s.safe

@@ -13,6 +13,7 @@ from icub_pmp.peripersonal.exceptions import MapNotTrained, NoEmptyArea
 from icub_pmp.peripersonal.gng_config import GrowingNeuralGasConfig
 from icub_pmp.peripersonal.growing_neural_gas import GngTrainingReport, GrowingNeuralGas
 from icub_pmp.peripersonal.imagined_collision_check import ImaginedCollisionCheck
+from icub_pmp.peripersonal.link_hull import LinkHull
 from icub_pmp.peripersonal.neural_activity import neural_activity
 from icub_pmp.peripersonal.pair_plan import PairPlan, PairSchedule, ScheduleStep
 from icub_pmp.peripersonal.peripersonal_config import PeripersonalConfig
@@ -35,6 +36,7 @@ __all__ = [
     "GrowingNeuralGas",
     "GrowingNeuralGasConfig",
     "ImaginedCollisionCheck",
+    "LinkHull",
     "MapNotTrained",
     "NoEmptyArea",
     "PairPlan",

@@ -6,11 +6,11 @@ hit each other, which the paper's two separate robots could not).
 :func:`fit_capsule` builds the capsule that bounds a point set: the segment lies on the
 points' principal axis through their centroid, the radius is the largest distance of a point
 from that axis, and the end points are pulled in as far as every point stays inside.
-:func:`fit_capsules` covers a link's collision mesh with one to ``max_pieces`` such capsules:
-the points of the mesh's convex hull (its vertices and samples of its faces: the physics
-collides the hull) are cut into equal slabs across the second principal axis, one capsule
-per slab, and the number of slabs with the smallest total capsule volume wins (one capsule
-for a long link such as the forearm, a few for a flat one such as the palm).
+:func:`fit_capsules` covers a link's collision mesh with one to ``max_pieces`` such
+capsules: the points of the mesh's convex hull (:class:`~icub_pmp.peripersonal.LinkHull`;
+the physics collides the hull) are cut into equal slabs across the second principal axis,
+one capsule per slab, and the number of slabs with the smallest total capsule volume wins
+(one capsule for a long link such as the forearm, a few for a flat one such as the palm).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 
 from icub_pmp.errors import InvalidInput
 
-__all__ = ["Capsule", "fit_capsule", "fit_capsules", "hull_points"]
+__all__ = ["Capsule", "fit_capsule", "fit_capsules"]
 
 
 class Capsule(NamedTuple):
@@ -69,27 +69,6 @@ def fit_capsule(frame: str, points: np.ndarray, axis: np.ndarray | None = None) 
     else:
         t0, t1 = t_hi, t_lo
     return Capsule(frame, c + t0 * u, c + t1 * u, r)
-
-
-def hull_points(vertices: np.ndarray, spacing: float = 0.005) -> np.ndarray:
-    """The convex hull of ``vertices`` (n, 3) [m] as points: its vertices plus samples of its
-    faces about ``spacing`` [m] apart."""
-    from scipy.spatial import ConvexHull
-
-    v = np.asarray(vertices, dtype=float)
-    hull = ConvexHull(v)
-    pts = [v[hull.vertices]]
-    for tri in v[hull.simplices]:
-        edge = max(np.linalg.norm(tri[1] - tri[0]), np.linalg.norm(tri[2] - tri[0]),
-                   np.linalg.norm(tri[2] - tri[1]))
-        n = int(math.ceil(edge / spacing))
-        if n < 2:
-            continue
-        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
-        keep = i + j <= n
-        w1, w2 = i[keep] / n, j[keep] / n
-        pts.append(tri[0] + w1[:, None] * (tri[1] - tri[0]) + w2[:, None] * (tri[2] - tri[0]))
-    return np.vstack(pts)
 
 
 def fit_capsules(frame: str, points: np.ndarray, max_pieces: int = 4) -> tuple[Capsule, ...]:

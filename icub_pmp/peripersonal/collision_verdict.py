@@ -14,13 +14,15 @@ class CollisionVerdict(NamedTuple):
         collides: a collision is predicted (distal or body test).
         distal_hit: the paper's test: a wrist/hand point of one arm came within
             ``distal_threshold`` of one of the other arm.
-        body_hit: a capsule of one arm came within ``margin`` of one of the other arm.
+        body_hit: a link hull of one arm came within ``margin`` of one of the other arm.
         min_distal_distance: smallest wrist/hand point distance [m].
-        min_clearance: smallest capsule-capsule clearance [m] (negative: overlap);
-            +inf without the body test.
+        min_clearance: smallest distance between the two arms' link hulls [m] (to the
+            hull sampling; when larger than ``margin + broad_phase``, a lower bound from the
+            capsules, which can be negative); +inf without the body test.
         time_of_closest_approach: when ``min_clearance`` (or, without the body test,
             ``min_distal_distance``) occurred [s] from the start of the motions.
-        closest_links: the two frames (left, right) at the closest approach.
+        closest_links: the two links (left, right) at the closest approach (the distal frames
+            without the body test).
     """
 
     collides: bool

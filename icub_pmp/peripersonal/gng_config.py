@@ -3,7 +3,13 @@
 The defaults are the paper's (Bhat and Mohan 2018, "Internal model for peripersonal space",
 steps a-g): tau_e = 10, vigilance v = 0.25, sigma_e = 1, e_w = 0.04, e_n = 0.0006,
 age_max = 25. The paper does not say in which unit its distances enter the error kernel;
-``length_scale`` is that unit here (see :class:`GrowingNeuralGas`).
+``length_scale`` is that unit here (see :class:`GrowingNeuralGas`). Its default, 15 mm (a
+neuron grows a neighbour for inputs beyond about 11 mm), was chosen for this project's goal:
+held-out babbled hand positions within 2 cm of a neuron at least 98 % of the time. On the
+iCub arm (7 joints uniform within their limits, a workspace about 0.7 m across) that took
+40,000 babbles per arm and about 5,500 neurons (measured: 0.986 with 5,479 neurons; 10,000
+babbles cover only 0.96 of held-out positions within 2 cm even with every babble kept).
+The paper's maps of two industrial robots had 478 and 476 neurons from about 10,000 babbles.
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ class GrowingNeuralGasConfig(ConfigBase):
     e_w: float = 0.04  # learning rate of the winner [-]
     e_n: float = 0.0006  # learning rate of the winner's neighbours [-]
     age_max: int = 25  # lateral connections older than this are pruned [inputs]
-    length_scale: float = 0.026  # one kernel unit [m]: distances are divided by it
+    length_scale: float = 0.015  # one kernel unit [m]: distances are divided by it
     max_epochs: int = 8  # passes over the babbling data at most
     min_growth: float = 0.01  # stop when a pass adds fewer neurons than this fraction [-]
     max_neurons: int = 20000  # hard cap on the map size [-]

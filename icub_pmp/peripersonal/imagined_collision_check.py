@@ -12,7 +12,8 @@ the other robot away from the shared workspace area at an initialized location".
 On the iCub the two arms are the two agents (the trunk, which both would move, stays still:
 ``use_torso`` false in every imagined reach). Two iCub arms can also hit each other with the
 forearm or upper arm, which two separate robots could not, so besides the paper's distal
-test each arm's link capsules (:class:`ArmBodyModel`) are compared with the other arm's.
+test each arm's link hulls (:class:`ArmBodyModel`: the convex hulls the physics collides,
+found through bounding capsules first) are compared with the other arm's.
 
 Steps of :meth:`ImaginedCollisionCheck.plan_pair`:
 
@@ -74,7 +75,7 @@ class ImaginedCollisionCheck:
         self.provider = self.planner.provider
         c = self.config
         self.body = body or ArmBodyModel.from_urdf(self.provider, self.spec, c.capsule_links,
-                                                   c.distal_frames)
+                                                   c.distal_frames, c.hull_spacing)
         self._names = self.provider.joint_names
         self._arm_idx = {a: np.array([self._names.index(j) for j in self.spec.arm_joints(a)])
                          for a in HANDS}
@@ -150,16 +151,9 @@ class ImaginedCollisionCheck:
         min_distal = float(dmin_k[k_d])
         distal_hit = bool(min_distal < c.distal_threshold)
         if c.body_check:
-            cl, cr = b.capsules_at("left", Q), b.capsules_at("right", Q)
-            gap = segment_distance(cl[:, :, None, 0], cl[:, :, None, 1], cr[:, None, :, 0],
-                                   cr[:, None, :, 1])
-            gap = gap - b.radii("left")[None, :, None] - b.radii("right")[None, None, :]
-            flat = gap.reshape(len(grid), -1)
-            k_c = int(np.argmin(flat.min(axis=1)))
-            i, j = np.unravel_index(int(np.argmin(flat[k_c])), gap.shape[1:])
-            min_clear = float(gap[k_c, i, j])
+            min_clear, (k_c, i, j) = self._hull_clearance(Q)
             body_hit = bool(min_clear < c.margin)
-            links = (b.capsule_names("left")[i], b.capsule_names("right")[j])
+            links = (b.link_names("left")[i], b.link_names("right")[j])
             t_close = float(grid[k_c])
         else:
             min_clear, body_hit = float("inf"), False
@@ -168,6 +162,51 @@ class ImaginedCollisionCheck:
             t_close = float(grid[k_d])
         return CollisionVerdict(distal_hit or body_hit, distal_hit, body_hit, min_distal,
                                 min_clear, t_close, links)
+
+    def _hull_clearance(self, Q: np.ndarray) -> tuple[float, tuple[int, int, int]]:
+        """Smallest distance [m] between a left and a right link hull over the samples Q
+        (K, nq), and where: (sample, left link, right link).
+
+        Broad phase: the capsules (they contain the hulls, so a capsule gap is a lower bound
+        of the hull distance) of every link pair at every sample. Narrow phase: the hulls of
+        the pairs whose capsule gap is below ``max(margin, 0) + broad_phase``, smallest gap
+        first, until no remaining gap can beat the best distance found (branch and bound);
+        pairs never compared count with their capsule gap (a lower bound).
+        """
+        b, c = self.body, self.config
+        Rl, pl = b.poses("left", Q)
+        Rr, pr = b.poses("right", Q)
+        cl = b.capsules_at("left", Q, (Rl, pl))
+        cr = b.capsules_at("right", Q, (Rr, pr))
+        gap = segment_distance(cl[:, :, None, 0], cl[:, :, None, 1], cr[:, None, :, 0],
+                               cr[:, None, :, 1])
+        gap -= b.radii("left")[None, :, None] + b.radii("right")[None, None, :]
+        ol, orr = b.capsule_links("left"), b.capsule_links("right")
+        link_gap = np.full((len(Q), len(b.hulls["left"]), len(b.hulls["right"])), np.inf)
+        for ci, li in enumerate(ol):
+            for cj, lj in enumerate(orr):
+                np.minimum(link_gap[:, li, lj], gap[:, ci, cj], out=link_gap[:, li, lj])
+        bound = max(c.margin, 0.0) + c.broad_phase
+        far = link_gap >= bound
+        if far.all():
+            k = np.unravel_index(int(np.argmin(link_gap)), link_gap.shape)
+            return float(link_gap[k]), tuple(int(x) for x in k)
+        best, where = np.inf, (0, 0, 0)
+        if far.any():
+            masked = np.where(far, link_gap, np.inf)
+            where = tuple(int(x) for x in np.unravel_index(int(np.argmin(masked)), masked.shape))
+            best = float(masked[where])
+        cand = np.argwhere(~far)
+        cand = cand[np.argsort(link_gap[~far], kind="stable")]
+        hl, hr = b.hulls["left"], b.hulls["right"]
+        resolution = 0.5 * min(h.spacing for h in hl + hr)
+        for k, i, j in cand:
+            if link_gap[k, i, j] >= best or best <= resolution:
+                break
+            d = hl[i].distance(Rl[k, i], pl[k, i], hr[j], Rr[k, j], pr[k, j], best)
+            if d < best:
+                best, where = d, (int(k), int(i), int(j))
+        return best, where
 
     @staticmethod
     def _motion(plan: ReachPlan) -> ArmMotion:
