@@ -15,12 +15,13 @@ __all__ = ["CollisionCheckConfig"]
 class CollisionCheckConfig(ConfigBase):
     """Imagined collision check (units in the field comments).
 
-    ``margin`` was chosen on 120 tuning pairs of reaches executed in parallel in the
-    simulator (``bench/peripersonal.py --tune``, pair seed 1): the pairs whose arms touched
-    in the physics had been imagined at most 1.8 mm apart (the hull sampling), while some
-    that did not touch had been imagined as close as 1.2 mm (the executed motion lags the
-    imagined one). 8 mm keeps 6 mm of safety above every touching pair (precision 0.84 on
-    that set); the benchmark scores it on other pairs (seed 2)."""
+    ``margin`` was chosen on tuning pairs of reaches executed in parallel in the simulator
+    (``bench/peripersonal.py --tune``, pair seed 1, 120 pairs): the pairs whose arms touched
+    in the physics had been imagined at most 1.8 mm (30,000-babble maps) and 2.2 mm
+    (40,000-babble maps) apart, about the hull sampling, while a few that did not touch had
+    been imagined as close as 0.9-1.2 mm (the executed motion lags the imagined one). 8 mm
+    keeps about 6 mm of safety above every touching pair (precision 0.84 and 0.95 on those
+    sets); the benchmark scores it on other pairs (seed 2)."""
 
     reach_tau: float = 2.0  # duration of each imagined reach [s]
     check_period: float = 0.02  # time between checked samples of the trajectories [s]
