@@ -213,13 +213,15 @@ class ImaginedCollisionCheck:
         return plan.t, plan.joint_names, plan.positions
 
     def _step(self, arm: str, action: str, start: float, motion: ArmMotion,
-              verdict: CollisionVerdict) -> ScheduleStep:
+              verdict: CollisionVerdict, velocities: np.ndarray | None = None) -> ScheduleStep:
+        """A schedule step; velocities [rad/s] by finite differences unless given."""
         t, names, pos = motion
         pos = np.asarray(pos, dtype=float)
-        vel = np.gradient(pos, t, axis=0) if len(t) > 1 else np.zeros_like(pos)
-        vel[0] = vel[-1] = 0.0
+        if velocities is None:
+            velocities = np.gradient(pos, t, axis=0) if len(t) > 1 else np.zeros_like(pos)
+            velocities[0] = velocities[-1] = 0.0
         return ScheduleStep(arm, action, float(start), tuple(names), np.asarray(t, float), pos,
-                            vel, verdict)
+                            np.asarray(velocities, dtype=float), verdict)
 
     # ------------------------------------------------------------------ pairs
     def plan_pair(self, targets: Mapping[str, object],
@@ -237,12 +239,28 @@ class ImaginedCollisionCheck:
         plans = {a: self.imagine(a, goals[a], q0) for a in HANDS}
         verdict = self.compare(q0, {a: self._motion(p) for a, p in plans.items()})
         if not verdict.collides:
-            steps = tuple(self._step(a, "reach", 0.0, self._motion(plans[a]), verdict)
-                          for a in HANDS)
+            steps = tuple(self._step(a, "reach", 0.0, self._motion(plans[a]), verdict,
+                                     plans[a].velocities) for a in HANDS)
             schedule = PairSchedule("parallel", steps, max(s.end for s in steps), True)
         else:
             schedule = self._serial(first, goals, plans, q0)
         return PairPlan(plans, verdict, schedule, time.perf_counter() - t0)
+
+    def _make_room(self, mover: str, motion: ArmMotion, q: np.ndarray, t: float,
+                   steps: list[ScheduleStep]) -> tuple[CollisionVerdict, float]:
+        """The verdict of ``mover``'s motion against the other arm held at ``q``. When they
+        collide, the other arm first moves to the safe posture: a park step is appended at
+        ``t``, ``q`` is updated and the motion is checked again. Returns (verdict, the time
+        the motion can start)."""
+        v = self.compare(q, {mover: motion})
+        if v.collides:
+            other = _other(mover)
+            park = self.park_motion(other, q)
+            steps.append(self._step(other, "park", t, park, self.compare(q, {other: park})))
+            t = steps[-1].end
+            q[self._arm_idx[other]] = park[2][-1]
+            v = self.compare(q, {mover: motion})
+        return v, t
 
     def _serial(self, first: str, goals: dict[str, np.ndarray], plans: dict[str, ReachPlan],
                 q0: np.ndarray) -> PairSchedule:
@@ -250,31 +268,20 @@ class ImaginedCollisionCheck:
         second = _other(first)
         steps: list[ScheduleStep] = []
         q = q0.copy()
-        t = 0.0
-        # 1. the first arm's reach against the second arm where it is
-        mf = self._motion(plans[first])
-        v = self.compare(q, {first: mf})
-        if v.collides:  # the second arm is in the way: it goes to the safe posture first
-            park = self.park_motion(second, q)
-            steps.append(self._step(second, "park", t, park, self.compare(q, {second: park})))
-            t = steps[-1].end
-            q[self._arm_idx[second]] = park[2][-1]
-            v = self.compare(q, {first: mf})
-        steps.append(self._step(first, "reach", t, mf, v))
+        # 1. the first arm's reach against the second arm where it is (or parked)
+        plan1 = plans[first]
+        m1 = self._motion(plan1)
+        v1, t = self._make_room(first, m1, q, 0.0, steps)
+        steps.append(self._step(first, "reach", t, m1, v1, plan1.velocities))
         t = steps[-1].end
-        q[self._arm_idx[first]] = mf[2][-1]
-        # 2. the second arm's reach (re-imagined if it moved) against the first arm's posture
+        q[self._arm_idx[first]] = m1[2][-1]
+        # 2. the second arm's reach (re-imagined if it was parked) against the first arm's
+        # final posture (or the first arm parked)
         plan2 = plans[second]
         if steps[0].action == "park":
             plan2 = self.imagine(second, goals[second], q)
         m2 = self._motion(plan2)
-        v2 = self.compare(q, {second: m2})
-        if v2.collides:  # the first arm's final posture is in the way: it leaves first
-            park = self.park_motion(first, q)
-            steps.append(self._step(first, "park", t, park, self.compare(q, {first: park})))
-            t = steps[-1].end
-            q[self._arm_idx[first]] = park[2][-1]
-            v2 = self.compare(q, {second: m2})
-        steps.append(self._step(second, "reach", t, m2, v2))
+        v2, t = self._make_room(second, m2, q, t, steps)
+        steps.append(self._step(second, "reach", t, m2, v2, plan2.velocities))
         safe = not any(s.clearance.collides for s in steps)
         return PairSchedule("serial", tuple(steps), steps[-1].end, safe)
