@@ -28,9 +28,10 @@ What the model is
   J_rotor of a few 1e-6 kg m^2 (small frameless motors): 0.05 / 0.03 / 0.01 kg m^2 for the
   40 / 20 / <= 11 N m groups, 0.001 for the eyes (SimConfig).
 - Collisions: hands, wrists, forearms, upper arms against the table, the box and the
-  cylinder; hands, wrists and forearms against the chest (the convex hulls of the upper arms
-  and of root_link overlap at ordinary postures, so those pairs are left out); objects against
-  table and floor. Collision
+  cylinder; every link of the left arm against every link of the right arm (the two arms can
+  hit each other; the links of one arm never collide with each other); hands, wrists and
+  forearms against the chest (the convex hulls of the upper arms and of root_link overlap at
+  ordinary postures, so those pairs are left out); objects against table and floor. Collision
   shapes are convex hulls of the simplified meshes (MuJoCo's mesh collision).
 - Sensors: force + torque at the four FT sensor joints (``<ft>_site`` on the child body, at
   the URDF sensor origin), head IMU (``head_imu_0``: gyro, accelerometer, orientation).
@@ -70,8 +71,10 @@ GROUP_LEGS = 2
 GROUP_COLLISION = 3
 #: collision bits (contype / conaffinity)
 _BIT_WORLD = 1  # table, floor, objects
-_BIT_ARM = 2  # hands, wrists, forearms, upper arms
+_BIT_LEFT_ARM = 2  # left hand, wrist, forearm, elbow, upper arm
 _BIT_TORSO = 4  # root_link, torso, chest
+_BIT_RIGHT_ARM = 8  # right hand, wrist, forearm, elbow, upper arm
+_BIT_ARM = _BIT_LEFT_ARM | _BIT_RIGHT_ARM
 OBJECT_NAMES = ("box", "cylinder")
 EYE_CAMERAS = {"left": "left_eye_camera", "right": "right_eye_camera"}
 
@@ -224,10 +227,12 @@ class ModelBuilder:
                 g.quat = _quat(c.T_link_geom[:3, :3])
                 g.group = GROUP_COLLISION
                 g.rgba = [0.5, 0.5, 0.9, 0.3]
-                g.contype = _BIT_ARM if collide_arm else _BIT_TORSO
-                if collide_arm:
-                    g.conaffinity = _BIT_WORLD | (_BIT_TORSO if stem in _ARM_TORSO_COLLIDE
-                                                  else 0)
+                own, other = ((_BIT_LEFT_ARM, _BIT_RIGHT_ARM) if link_name.startswith("l_")
+                              else (_BIT_RIGHT_ARM, _BIT_LEFT_ARM))
+                g.contype = own if collide_arm else _BIT_TORSO
+                if collide_arm:  # one arm's links never collide with each other
+                    g.conaffinity = _BIT_WORLD | other | (
+                        _BIT_TORSO if stem in _ARM_TORSO_COLLIDE else 0)
                 else:  # the torso only touches what names _BIT_TORSO in its conaffinity
                     g.conaffinity = 0
                 g.friction = [self.config.object_friction, 0.005, 0.0001]

@@ -28,6 +28,8 @@ step, torque applied during it):
   +9.81 up when still) in the frame.
 - :meth:`contact_wrench` -- ground truth: total external wrench on a hand body (contacts +
   applied forces), root_link axes, moment about the hand frame origin (``l_hand_dh_frame``).
+- :meth:`self_contacts` -- ground truth: the robot touching itself (left arm against right
+  arm, an arm against the torso), one :class:`SelfContact` per MuJoCo contact point.
 
 Scene: :meth:`object_pose`, :meth:`set_object_pose` (``box``, ``cylinder``),
 :meth:`apply_wrench` (a scripted external wrench on a body or at a frame for a duration).
@@ -48,12 +50,14 @@ from icub_pmp.kinematics.robot_spec import RobotSpec
 from icub_sim_bridge.model_builder import OBJECT_NAMES, BuiltModel, ModelBuilder
 from icub_sim_bridge.sim_config import SimConfig
 
-__all__ = ["Simulator", "JointState", "Wrench", "Pose", "ImuReading", "FT_SENSORS",
-           "FT_SIGN_CONVENTION"]
+__all__ = ["Simulator", "JointState", "Wrench", "Pose", "ImuReading", "SelfContact",
+           "FT_SENSORS", "FT_SIGN_CONVENTION", "SELF_CONTACT_KINDS"]
 
 FT_SENSORS = ("l_arm_ft", "r_arm_ft", "l_leg_ft", "r_leg_ft")
 FT_SIGN_CONVENTION = "child_to_parent"
 _HANDS = ("left", "right")
+#: arm-arm: a left-arm link against a right-arm link; arm-torso: an arm link against the torso
+SELF_CONTACT_KINDS = ("arm-arm", "arm-torso")
 _TENDON_JOINTS = ("eyes_version", "eyes_vergence")
 #: hold gains per N m of torque limit: kp = 5 * tau_max [N m/rad], kd = 0.2 * tau_max [N m s/rad]
 _HOLD_KP_PER_NM = 5.0
@@ -96,6 +100,23 @@ class ImuReading(NamedTuple):
     orientation: np.ndarray
     angular_velocity: np.ndarray
     linear_acceleration: np.ndarray
+
+
+class SelfContact(NamedTuple):
+    """One contact point between two links of the robot.
+
+    ``body1`` is the left-arm link of an arm-arm contact, the arm link of an arm-torso one;
+    ``force`` (3,) [N] is what ``body2`` exerts on ``body1`` (root_link axes), ``normal_force``
+    [N] its normal component, ``depth`` [m] the penetration, ``position`` (3,) [m] the
+    contact point in root_link."""
+
+    kind: str
+    body1: str
+    body2: str
+    position: np.ndarray
+    force: np.ndarray
+    normal_force: float
+    depth: float
 
 
 @dataclasses.dataclass
@@ -164,6 +185,19 @@ class Simulator:
             self._objects[name] = (b, m.jnt_qposadr[jnt], m.jnt_dofadr[jnt])
         self._object_home = {n: self.data.qpos[a:a + 7].copy()
                              for n, (_, a, _) in self._objects.items()}
+        # self contacts: side of each robot geom (0 not the robot, 1 left arm, 2 right arm,
+        # 3 torso) by the prefix of its body (URDF link) name
+        robot_root = m.body_rootid[self._id(mujoco.mjtObj.mjOBJ_BODY, self.spec.root_frame)]
+        self._geom_side = np.zeros(m.ngeom, dtype=int)
+        for g in range(m.ngeom):
+            b = int(m.geom_bodyid[g])
+            if b == 0 or m.body_rootid[b] != robot_root or not (m.geom_contype[g]
+                                                                  or m.geom_conaffinity[g]):
+                continue
+            name = m.body(b).name
+            self._geom_side[g] = 1 if name.startswith("l_") else 2 if name.startswith("r_") \
+                else 3
+        self._f6 = np.zeros(6)
         # hold gains (an affine actuator PD, see _set_held) and the dofs for gravity terms
         self._kp = _HOLD_KP_PER_NM * self.torque_limits
         self._kd = _HOLD_KD_PER_NM * self.torque_limits
@@ -379,6 +413,31 @@ class Simulator:
         tau_c, f = d.cfrc_ext[b, :3], d.cfrc_ext[b, 3:]
         p = d.site_xpos[self._hand_site[hand]]
         return Wrench(f.copy(), tau_c + _cross(c - p, f))
+
+    def self_contacts(self) -> list[SelfContact]:
+        """Ground truth: the robot's links touching each other now (class doc of
+        :class:`SelfContact`); empty when none do."""
+        d, m = self.data, self.model
+        if d.ncon == 0:
+            return []
+        s1 = self._geom_side[d.contact.geom1]
+        s2 = self._geom_side[d.contact.geom2]
+        out = []
+        for i in np.flatnonzero((s1 > 0) & (s2 > 0) & (s1 != s2)):
+            c = d.contact[i]
+            mujoco.mj_contactForce(m, d, int(i), self._f6)
+            # contact frame: first row = normal from geom1 to geom2; the force is on geom2
+            on_2 = c.frame.reshape(3, 3).T @ self._f6[:3]
+            b1, b2 = int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])
+            k1, k2 = s1[i], s2[i]
+            if k1 > k2:  # body1: the left arm's link, or the arm's against the torso
+                b1, b2, on_1 = b2, b1, on_2
+            else:
+                on_1 = -on_2
+            kind = "arm-torso" if 3 in (k1, k2) else "arm-arm"
+            out.append(SelfContact(kind, m.body(b1).name, m.body(b2).name, c.pos.copy(), on_1,
+                                   float(self._f6[0]), float(max(-c.dist, 0.0))))
+        return out
 
     def frame_pose(self, name: str) -> Pose:
         """Pose of a site (URDF frame) or body ``name`` in root_link."""

@@ -46,6 +46,27 @@ def test_model_joints_and_actuators(sim):
     assert not any(j.startswith(("l_hip", "r_knee", "l_ankle")) for j in joints)
 
 
+def test_collision_pairs_between_the_arms(sim):
+    """MuJoCo's contype/conaffinity filter lets every collision geom of the left arm touch every
+    one of the right arm, and no two geoms of the same arm touch each other; the arms still
+    collide with the table and objects."""
+    m = sim.model
+
+    def collide(a: int, b: int) -> bool:
+        return bool((m.geom_contype[a] & m.geom_conaffinity[b])
+                    or (m.geom_contype[b] & m.geom_conaffinity[a]))
+
+    arm = {s: [g for g in range(m.ngeom) if m.geom(g).name.startswith(f"{s}_")
+               and m.geom(g).name.endswith("_collision")] for s in "lr"}
+    assert len(arm["l"]) == len(arm["r"]) == 5
+    assert all(collide(a, b) for a in arm["l"] for b in arm["r"])
+    for side in "lr":
+        assert not any(collide(a, b) for a in arm[side] for b in arm[side] if a != b)
+    table = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "table_top")
+    box = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "box_geom")
+    assert all(collide(a, table) and collide(a, box) for a in arm["l"] + arm["r"])
+
+
 def test_written_mjcf_loads(sim, tmp_path):
     """The model written as MJCF (ModelBuilder.write_xml, meshes inline) loads back with the
     same bodies, actuators, sensors and cameras."""

@@ -15,6 +15,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 from std_srvs.srv import SetBool
 
+from icub_interfaces.msg import SelfContacts
 from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
 from icub_pmp.config import config_dir
 from icub_pmp.kinematics import RobotSpec
@@ -173,6 +174,44 @@ def test_services(bridge, ros_probe):
     assert _call(ros_probe, "/sim/set_paused", SetBool, SetBool.Request(data=False)).success
     assert len(ros_probe.collect("/joint_states", JointState, 5)) == 5
     assert _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="")).success
+
+
+def test_self_contacts_when_the_arms_meet(bridge, ros_probe):
+    """/ground_truth/self_contacts (root_link) is an empty list at rest; driving both arms
+    inwards (constant shoulder torques, objects moved off the table) brings the hands
+    together and the topic reports an arm-arm contact, left link first, with a force."""
+    _wait_up(ros_probe, bridge)
+    assert _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="rest")).success
+    for name, (x, y, z) in (("box", (-0.5, 0.35, -0.05)), ("cylinder", (-0.5, -0.35, -0.03))):
+        pose = Pose()
+        pose.position.x, pose.position.y, pose.position.z = x, y, z
+        pose.orientation.w = 1.0
+        r = _call(ros_probe, "/sim/set_object_pose", SetObjectPose,
+                  SetObjectPose.Request(name=name, pose=pose))
+        assert r.success, r.message
+    rest = ros_probe.collect("/ground_truth/self_contacts", SelfContacts, 3)
+    assert len(rest) == 3 and rest[-1].header.frame_id == "root_link"
+    assert all(len(m.contacts) == 0 for m in rest)
+    from rclpy.qos import qos_profile_sensor_data
+
+    got = []
+    sub = ros_probe.node.create_subscription(
+        SelfContacts, "/ground_truth/self_contacts",
+        lambda m: got.append(m) if any(c.kind == "arm-arm" for c in m.contacts) else None,
+        qos_profile_sensor_data)
+    pub = ros_probe.node.create_publisher(JointState, "/effort_command",
+                                          qos_profile_sensor_data)
+    assert ros_probe.wait_for(lambda: pub.get_subscription_count() > 0, 30.0)
+    cmd = JointState(name=[f"{s}_shoulder_{j}" for s in "lr" for j in ("pitch", "yaw", "roll")],
+                     effort=[-5.0, 4.0, -3.0] * 2)
+    assert ros_probe.wait_for(lambda: (pub.publish(cmd), bool(got))[1], 30.0), \
+        bridge.output()[-2000:]
+    c = next(c for c in got[0].contacts if c.kind == "arm-arm")
+    assert c.body1.startswith("l_") and c.body2.startswith("r_") and c.normal_force > 0.0
+    assert math.hypot(c.force.x, c.force.y, c.force.z) > 0.0
+    ros_probe.destroy(sub)
+    ros_probe.destroy(pub)
+    assert _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="rest")).success
 
 
 def test_runtime_parameters_validated(bridge, ros_probe):

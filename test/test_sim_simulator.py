@@ -154,3 +154,33 @@ def test_forearm_stops_on_the_chest(sim):
     assert frozenset(("chest_collision", "l_forearm_collision")) in pairs or \
         frozenset(("chest_collision", "l_hand_collision")) in pairs
     assert sim.joint_state().position[i] < sim.upper[i] - 0.15
+
+
+def test_the_two_arms_collide_with_each_other(sim):
+    """The left and right arms collide: hands brought together in front of the chest and
+    pushed inwards (shoulder yaw torques) stop on each other, and self_contacts reports the
+    arm-arm contact (left link first, the force the right hand exerts on the left one points
+    to the left, -y); apart at rest, there is no self contact."""
+    sim.reset("rest")
+    sim.step(50)
+    assert sim.self_contacts() == []
+    q = {}
+    for s in "lr":
+        q.update({f"{s}_shoulder_pitch": -0.8, f"{s}_shoulder_roll": 0.45,
+                  f"{s}_shoulder_yaw": 0.5, f"{s}_elbow": 1.4})
+    sim.reset(q=q)
+    assert sim.self_contacts() == []
+    sim.command(["l_shoulder_yaw", "r_shoulder_yaw"], [4.0, 4.0])
+    sim.step(300)
+    contacts = sim.self_contacts()
+    arm_arm = [c for c in contacts if c.kind == "arm-arm"]
+    assert arm_arm
+    for c in arm_arm:
+        assert c.body1.startswith("l_") and c.body2.startswith("r_")
+        assert c.normal_force > 0.0 and c.depth >= 0.0
+    total = np.sum([c.force for c in arm_arm], axis=0)
+    assert total[1] < -1.0  # the right hand pushes the left one towards the left
+    # the hands did not pass through each other: the left hand stays left of the right one
+    left = sim.frame_pose("l_hand_dh_frame").position[1]
+    right = sim.frame_pose("r_hand_dh_frame").position[1]
+    assert left < right

@@ -9,7 +9,9 @@ publishes  /clock (every step), /joint_states (every step: position [rad], veloc
            the wrench the distal link exerts on the proximal one), /imu (head_imu_0),
            /cam/{left,right}/image_raw + camera_info (rgb8 at camera_rate of sim time,
            frame l_eye_optical / r_eye_optical), /ground_truth/contact_wrench/{left,right}_hand
-           (root_link, about the hand frame), /ground_truth/objects/{box,cylinder} (PoseStamped)
+           (root_link, about the hand frame), /ground_truth/objects/{box,cylinder} (PoseStamped),
+           /ground_truth/self_contacts (icub_interfaces/SelfContacts: the arms touching each
+           other or the torso, root_link; an empty list when nothing touches)
 subscribes /effort_command (JointState name + effort [N m]; any subset of joints; rejected
            whole with a throttled warning on unknown names, NaN/inf, length mismatch)
 services   /sim/reset (ResetSim), /sim/set_object_pose (SetObjectPose), /sim/set_paused
@@ -57,6 +59,8 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 from std_srvs.srv import SetBool
 
+from icub_interfaces.msg import SelfContact as SelfContactMsg
+from icub_interfaces.msg import SelfContacts
 from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.nodes.conversions import (
@@ -139,6 +143,7 @@ class SimBridge(Node):
             for h in ("left", "right")}
         self.pub_obj = {o: self.create_publisher(PoseStamped, f"/ground_truth/objects/{o}", sd)
                         for o in self.sim.object_names}
+        self.pub_self = self.create_publisher(SelfContacts, "/ground_truth/self_contacts", sd)
         # --- reusable messages (filled in place every step)
         self._clock_msg = Clock()
         self._js_writer = RawJointStateWriter(list(self._names))
@@ -154,6 +159,8 @@ class SimBridge(Node):
             m = WrenchStamped()
             m.header.frame_id = "root_link"
             self._gt_msgs[h] = m
+        self._self_msg = SelfContacts()
+        self._self_msg.header.frame_id = "root_link"
         self._obj_msgs = {}
         for o in self.sim.object_names:
             m = PoseStamped()
@@ -416,11 +423,27 @@ class SimBridge(Node):
                 m.pose.orientation.w, m.pose.orientation.x = float(q[0]), float(q[1])
                 m.pose.orientation.y, m.pose.orientation.z = float(q[2]), float(q[3])
                 pub.publish(m)
+            if self._active(self.pub_self):
+                self._publish_self_contacts(ns)
         if self.cameras is not None and ns >= self._next_cam_ns and (
                 self._active(self.pub_img["left"]) or self._active(self.pub_img["right"])
                 or self._active(self.pub_info["left"]) or self._active(self.pub_info["right"])):
             self._next_cam_ns = ns + self._cam_period_ns
             self.cameras.request(sim.data)
+
+    def _publish_self_contacts(self, ns: int) -> None:
+        m = self._self_msg
+        _set_stamp(m.header.stamp, ns)
+        contacts = []
+        for c in self.sim.self_contacts():
+            cm = SelfContactMsg()
+            cm.body1, cm.body2, cm.kind = c.body1, c.body2, c.kind
+            _set_vec(cm.position, c.position)
+            _set_vec(cm.force, c.force)
+            cm.normal_force, cm.depth = c.normal_force, c.depth
+            contacts.append(cm)
+        m.contacts = contacts
+        self.pub_self.publish(m)
 
     # ------------------------------------------------------------------ the loop
     def run(self, should_stop: Callable[[], bool]) -> None:
