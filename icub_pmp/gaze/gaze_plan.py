@@ -82,8 +82,14 @@ class GazePlan:
         """Controller state at time ``t`` [s] from the start (the sample at or before it)."""
         return self.states[self.index_at(t)]
 
-    def command(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """What to send to the joint controller: (times (N-1,) [s], positions (N-1, 6),
-        velocities (N-1, 6)) without the start sample, so that the controller joins the
-        trajectory from its own current set-point."""
-        return self.t[1:], self.q[1:], self.qd[1:]
+    def command(self, since: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What to send to the joint controller: (times (M,) [s], positions (M, 6),
+        velocities (M, 6)) of the samples after ``since`` [s] (default: all but the start
+        sample), times counted from ``since``; the controller joins the first of them from
+        its own current set-point. ``since`` > 0 drops the part of the plan that is already
+        past when it is published (the time spent planning)."""
+        keep = self.t > since + 1e-9
+        if not keep.any():
+            keep[-1] = True
+        t = self.t[keep] - since
+        return np.maximum(t, 1e-3), self.q[keep], self.qd[keep]
