@@ -277,6 +277,23 @@ def test_tracking_update_continues_smoothly(gaze, model, rest):
         assert _axis_errors(model, _with(rest, u.q[-1]), p).max() < 2e-3
 
 
+def test_command_drops_the_part_already_past(gaze, rest):
+    """GazePlan.command(since) sends the samples after ``since`` with times counted from it
+    (what the node publishes after spending ``since`` planning); by default all but the
+    start sample."""
+    plan = gaze.plan(np.array([-0.4, 0.1, 0.1]), rest)
+    t, q, qd = plan.command()
+    np.testing.assert_allclose(t, plan.t[1:])
+    np.testing.assert_allclose(q, plan.q[1:])
+    t2, q2, qd2 = plan.command(since=0.035)
+    assert t2[0] == pytest.approx(0.005) and np.all(np.diff(t2) > 0)
+    np.testing.assert_allclose(q2, plan.q[plan.t > 0.035])
+    np.testing.assert_allclose(qd2, plan.qd[plan.t > 0.035])
+    t3, q3, _ = plan.command(since=plan.duration + 1.0)  # all past: hold the last point
+    assert len(t3) == 1 and t3[0] > 0
+    np.testing.assert_allclose(q3[0], plan.q[-1])
+
+
 def test_fixation_point_of_the_solution_is_the_target(gaze, rest):
     """GazeController.fixation_point at the solved posture returns the target."""
     p = np.array([-0.3, -0.15, 0.05])
