@@ -14,10 +14,11 @@ Tracking: while ``tracking`` is true, every geometry_msgs/PointStamped on ``trac
 (at most one per ``tracking_min_interval``) updates the target; the head continues from the
 running plan's state (:meth:`~icub_pmp.gaze.GazeController.update`).
 
-Subscribes ``/joint_states`` (read raw; its stamps are the node's time base, as for the
-impedance controller). Publishes ``/gaze/fixation_point`` (PointStamped in root_link, the
-point the optical axes meet at, ``fixation_rate`` Hz on the node clock) and ``/gaze/target``
-(PointStamped in root_link, each new target).
+Subscribes ``/joint_states`` (read raw on a thread of its own,
+:class:`~icub_pmp.nodes.joint_state_listener.JointStateListener`; its stamps are the node's
+time base, as for the impedance controller). Publishes ``/gaze/fixation_point``
+(PointStamped in root_link, the point the optical axes meet at, ``fixation_rate`` Hz on the
+node clock) and ``/gaze/target`` (PointStamped in root_link, each new target).
 
 Target frames: empty or ``root_link``, or any frame of the iCub model, at the current
 posture. Bad inputs (NaN, unknown frame, behind the head, too close, no joint states yet)
@@ -37,12 +38,9 @@ from typing import Any, NamedTuple
 import numpy as np
 from geometry_msgs.msg import PointStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-from sensor_msgs.msg import JointState
 from std_srvs.srv import SetBool
 from trajectory_msgs.msg import JointTrajectory
 
@@ -56,8 +54,8 @@ from icub_pmp.nodes.conversions import (
     point_to_array,
     sec_to_time,
 )
-from icub_pmp.nodes.node_runner import run_node
-from icub_pmp.nodes.raw_messages import RawJointStateReader, read_joint_state
+from icub_pmp.nodes.joint_state_listener import JointStateListener
+from icub_pmp.nodes.node_runner import spin_node
 from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["GazeControllerNode", "main"]
@@ -85,18 +83,18 @@ class GazeControllerNode(Node):
                 value = list(default) if isinstance(default, tuple) else default
                 self.declare_parameter(f.name, value,
                                        ParameterDescriptor(description=cls.__name__))
-        self.config, self.node_config = self._configs({})
+        try:
+            self.config, self.node_config = self._configs({})
+        except IcubPmpError as exc:
+            raise SystemExit(f"gaze_controller: bad parameters: {exc}") from exc
         self.gaze = GazeController(self.config)
         self._lock = threading.Lock()
-        self._reader = RawJointStateReader()
-        self._js: tuple[float, list[str], np.ndarray] | None = None
         self._active: _Active | None = None
         self._last_track = -math.inf
-        self._cb_inputs = MutuallyExclusiveCallbackGroup()
-        self._cb_services = MutuallyExclusiveCallbackGroup()
-        self.create_subscription(JointState, "/joint_states", self._on_joint_states,
-                                 qos_profile_sensor_data, raw=True,
-                                 callback_group=self._cb_inputs)
+        # the joint states arrive on their own thread: a look_at that waits keeps seeing them
+        self._listener = JointStateListener(
+            f"{self.get_name()}_joint_states",
+            lambda text: self.get_logger().warning(text, throttle_duration_sec=5.0))
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self.traj_pub = self.create_publisher(JointTrajectory, "/joint_trajectory", reliable)
         self.fixation_pub = self.create_publisher(PointStamped, "/gaze/fixation_point", 10)
@@ -104,12 +102,9 @@ class GazeControllerNode(Node):
         self._tracking_sub = None
         self._subscribe_tracking(self.node_config.tracking_topic)
         self._fixation_timer = self.create_timer(
-            1.0 / self.node_config.fixation_rate, self._on_fixation_timer,
-            callback_group=self._cb_inputs)
-        self.create_service(LookAt, "/gaze/look_at", self._on_look_at,
-                            callback_group=self._cb_services)
-        self.create_service(SetBool, "/gaze/set_tracking", self._on_set_tracking,
-                            callback_group=self._cb_services)
+            1.0 / self.node_config.fixation_rate, self._on_fixation_timer)
+        self.create_service(LookAt, "/gaze/look_at", self._on_look_at)
+        self.create_service(SetBool, "/gaze/set_tracking", self._on_set_tracking)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
         self.get_logger().info(
@@ -148,8 +143,7 @@ class GazeControllerNode(Node):
         if node_config.fixation_rate != old.fixation_rate:
             self.destroy_timer(self._fixation_timer)
             self._fixation_timer = self.create_timer(
-                1.0 / node_config.fixation_rate, self._on_fixation_timer,
-                callback_group=self._cb_inputs)
+                1.0 / node_config.fixation_rate, self._on_fixation_timer)
         if node_config.tracking != old.tracking:
             self.get_logger().info(f"tracking {'on' if node_config.tracking else 'off'} "
                                    f"({node_config.tracking_topic})")
@@ -159,28 +153,15 @@ class GazeControllerNode(Node):
             self.destroy_subscription(self._tracking_sub)
         # best effort matches publishers of either reliability
         self._tracking_sub = self.create_subscription(
-            PointStamped, topic, self._on_tracking_target, qos_profile_sensor_data,
-            callback_group=self._cb_inputs)
+            PointStamped, topic, self._on_tracking_target, qos_profile_sensor_data)
 
     # ------------------------------------------------------------------ inputs
-    def _on_joint_states(self, data: bytes) -> None:
-        try:
-            msg = read_joint_state(self._reader, data)
-            if msg.position.shape != (len(msg.name),) or not np.all(np.isfinite(msg.position)):
-                raise InvalidInput("JointState.position is missing, of the wrong length or "
-                                   "not finite")
-        except IcubPmpError as exc:
-            self.get_logger().warning(f"dropping /joint_states: {exc}",
-                                      throttle_duration_sec=5.0)
-            return
-        self._js = (msg.stamp_ns * 1e-9, msg.name, msg.position)
-
     def _joints(self) -> tuple[float, dict[str, float]]:
         """(time [s], {joint: position [rad]}) of the latest joint states."""
-        js = self._js
+        js = self._listener.latest
         if js is None:
             raise InvalidInput("no /joint_states received yet: the head posture is unknown")
-        return js[0], dict(zip(js[1], (float(v) for v in js[2])))
+        return js.time, js.as_dict()
 
     def _target_in_root(self, msg: PointStamped, joints: dict[str, float]) -> np.ndarray:
         """The message's point [m] in root_link (frames transformed at the current posture)."""
@@ -213,7 +194,7 @@ class GazeControllerNode(Node):
         wait = self.node_config.subscriber_timeout
         note = subscriber_note(wait_for_subscribers(self.traj_pub, wait), wait)
         # the joint states went on while planning: send the plan from the current time
-        late = max(0.0, self._js[0] - now)
+        late = max(0.0, self._listener.latest.time - now)
         t, q, qd = plan.command(since=late)
         traj = arrays_to_trajectory(plan.joint_names, t, q, qd, stamp=sec_to_time(now + late))
         self.traj_pub.publish(traj)
@@ -271,8 +252,8 @@ class GazeControllerNode(Node):
         self.get_logger().info(f"/gaze/look_at: {res.message}")
 
     def _wait(self, active: _Active, res: LookAt.Response) -> None:
-        """Block until the joint states show the head at the plan's targets (service group:
-        the joint states keep coming in the other callback group)."""
+        """Block until the joint states (the listener's thread) show the head at the plan's
+        targets."""
         nc = self.node_config
         sol = active.plan.solution
         tol = np.array([nc.motion_done_neck] * 3 + [nc.motion_done_eyes] * 3)
@@ -304,9 +285,10 @@ class GazeControllerNode(Node):
 
     # ------------------------------------------------------------------ tracking, state
     def _on_tracking_target(self, msg: PointStamped) -> None:
-        if not self.node_config.tracking or self._js is None:
+        js = self._listener.latest
+        if not self.node_config.tracking or js is None:
             return
-        now = self._js[0]
+        now = js.time
         if now - self._last_track < self.node_config.tracking_min_interval:
             return
         try:
@@ -321,7 +303,7 @@ class GazeControllerNode(Node):
                                     throttle_duration_sec=2.0)
 
     def _on_fixation_timer(self) -> None:
-        if self._js is None:
+        if self._listener.latest is None:
             return
         try:
             now, joints = self._joints()
@@ -332,10 +314,16 @@ class GazeControllerNode(Node):
             self.fixation_pub.publish(self._point(p, now))
 
 
+    def destroy_node(self) -> None:
+        """Stop the joint-state listener, then destroy the node."""
+        self._listener.close()
+        super().destroy_node()
+
+
 def main(args: list[str] | None = None) -> None:
-    """Entry point (``ros2 run icub_pmp gaze_controller``): a multi-threaded executor, so a
-    ``look_at`` that waits keeps receiving joint states."""
-    run_node(GazeControllerNode, args, "gaze_controller", executor=MultiThreadedExecutor)
+    """Entry point (``ros2 run icub_pmp gaze_controller``): an EventsExecutor (its 1 kHz
+    ``/clock`` with ``use_sim_time`` costs little there)."""
+    spin_node(GazeControllerNode, args)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Callable
 
 import rclpy
-from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 
@@ -44,19 +44,17 @@ def spin_node(factory: Callable[[], Node], args: list[str] | None = None) -> Non
 
 
 def run_node(factory: Callable[[], Node], args: list[str] | None = None,
-             name: str = "node", executor: Callable[[], Executor] | None = None) -> None:
+             name: str = "node") -> None:
     """``rclpy.init(args)``, build the node with ``factory()``, ``rclpy.spin`` until shutdown
     (Ctrl-C and external shutdowns end quietly), then destroy it and ``try_shutdown``. A
-    :class:`~icub_pmp.errors.ConfigError` while building exits with a one-line message.
-    ``executor``: a factory of the executor to spin with (default: rclpy's single-threaded
-    one), e.g. ``MultiThreadedExecutor`` for a node whose service waits on its topics."""
+    :class:`~icub_pmp.errors.ConfigError` while building exits with a one-line message."""
     from icub_pmp.errors import ConfigError
 
     rclpy.init(args=args)
     node = None
     try:
         node = factory()
-        rclpy.spin(node, executor=executor() if executor is not None else None)
+        rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ConfigError as exc:
