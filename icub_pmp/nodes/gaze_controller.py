@@ -45,7 +45,7 @@ from std_srvs.srv import SetBool
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import LookAt
-from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.gaze import GAZE_JOINTS, GazeController, GazeControllerConfig, GazeNodeConfig
 from icub_pmp.gaze.gaze_plan import GazePlan
 from icub_pmp.nodes.conversions import (
@@ -170,9 +170,7 @@ class GazeControllerNode(Node):
         if frame in ("", ROOT):
             return p
         model = self.gaze.model
-        if not model.model.existFrame(frame):
-            raise UnknownName("frame", frame, [f.name for f in model.model.frames])
-        pose = model.frame_pose(model.q_from_dict(joints), frame)
+        pose = model.frame_pose(model.q_from_dict(joints), frame)  # UnknownName if none
         return pose.rotation @ p + pose.translation
 
     # ------------------------------------------------------------------ planning
