@@ -9,6 +9,7 @@ PACKAGE = "icub_pmp"
 # One entry per node executable (`ros2 run icub_pmp <name>`); module path = icub_pmp.nodes.<name>.
 NODES = [
     "cartesian_solver",
+    "gaze_controller",
     "impedance_controller",
     "motion_segmenter",
     "pmp_planner",

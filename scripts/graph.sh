@@ -20,7 +20,7 @@ if [[ ! -f "$ROOT/install/.build-stamp" ]]; then
   exit 2
 fi
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
-DEFAULT="sim_bridge wrench_estimator impedance_controller pmp_planner cartesian_solver motion_segmenter robot_state_publisher"
+DEFAULT="sim_bridge wrench_estimator impedance_controller pmp_planner cartesian_solver gaze_controller motion_segmenter robot_state_publisher"
 NODES="${GRAPH_NODES:-$DEFAULT}"
 PIDS=()
 stop() {

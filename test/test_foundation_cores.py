@@ -18,6 +18,7 @@ CORE_PACKAGES = [
     "icub_pmp.control",
     "icub_pmp.dynamics",
     "icub_pmp.cartesian",
+    "icub_pmp.gaze",
     "icub_pmp.vision",
     "icub_pmp.peripersonal",
     "icub_pmp.bags",

@@ -40,6 +40,27 @@ def test_rendered_sequence_ground_truth():
     assert np.allclose(step, 9.7, atol=1.5), step
 
 
+def test_frame_at_poses_the_robot_from_joint_states():
+    """frame_at renders the robot at given joints (a simulation's joint states, eyes as tilt,
+    version, vergence) and the ball where asked: posed with a sequence frame's own joints and
+    target, it reproduces that frame; turning the neck yaw moves the camera."""
+    gen = SequenceGenerator(right_camera=False)
+    try:
+        spec = SequenceSpec(speed=0.4, direction="parallel", head_rate=20.0, n_frames=3,
+                            seed=3)
+        f = list(gen.frames(spec))[-1]
+        g = gen.frame_at(f.joints, f.target_position, index=7)
+        turned = gen.frame_at({**f.joints, "neck_yaw": f.joints["neck_yaw"] + 0.1}, None)
+    finally:
+        gen.close()
+    assert g.index == 7
+    np.testing.assert_array_equal(g.left, f.left)
+    np.testing.assert_array_equal(g.left_mask, f.left_mask)
+    np.testing.assert_allclose(g.T_root_left, f.T_root_left, atol=1e-12)
+    assert not turned.left_mask.any() and np.isnan(turned.target_position).all()
+    assert np.linalg.norm(turned.T_root_left[:3, 2] - f.T_root_left[:3, 2]) > 0.05
+
+
 def test_sequence_spec_validation():
     """Unknown directions or head axes and negative values are rejected by name."""
     with pytest.raises(UnknownName, match="direction"):

@@ -18,9 +18,22 @@ from scipy.signal import cont2discrete
 
 from icub_pmp.errors import InvalidInput
 
-__all__ = ["MinJerkFilter", "MIN_JERK_COEFFS"]
+__all__ = ["MinJerkFilter", "MIN_JERK_COEFFS", "min_jerk_system"]
 
 MIN_JERK_COEFFS = (150.766, 84.981, 15.967)  # -a T^3, -b T^2, -c T
+
+
+def min_jerk_system(T: float, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """Continuous state space ``(A (2, 2), B (2, 1))`` of ``F(s)`` for the trajectory time
+    ``T`` [s]: state (u, u_dot), input the error e, ``x' = A x + B e``. Raises
+    :class:`InvalidInput` unless ``Ts`` > 0 [s] and ``T`` >= 10 Ts (iKin's lower bound)."""
+    if not (Ts > 0 and np.isfinite(Ts)):
+        raise InvalidInput(f"Ts: expected a period > 0 [s], got {Ts}")
+    if not (np.isfinite(T) and T >= 10 * Ts):
+        raise InvalidInput(f"T: expected a trajectory time >= 10 Ts = {10 * Ts} s, got {T}")
+    ka, kb, kc = MIN_JERK_COEFFS
+    a, b, c = -ka / T**3, -kb / T**2, -kc / T
+    return np.array([[0.0, 1.0], [b, c]]), np.array([[0.0], [-a]])
 
 
 class MinJerkFilter:
@@ -35,15 +48,8 @@ class MinJerkFilter:
     """
 
     def __init__(self, n: int, T: float, Ts: float):
-        if not (Ts > 0 and np.isfinite(Ts)):
-            raise InvalidInput(f"Ts: expected a period > 0 [s], got {Ts}")
-        if not (np.isfinite(T) and T >= 10 * Ts):
-            raise InvalidInput(f"T: expected a trajectory time >= 10 Ts = {10 * Ts} s, got {T}")
+        A, B = min_jerk_system(T, Ts)
         self.n, self.T, self.Ts = int(n), float(T), float(Ts)
-        ka, kb, kc = MIN_JERK_COEFFS
-        a, b, c = -ka / T**3, -kb / T**2, -kc / T
-        A = np.array([[0.0, 1.0], [b, c]])
-        B = np.array([[0.0], [-a]])
         C = np.array([[1.0, 0.0]])
         Ad, Bd, _, _, _ = cont2discrete((A, B, C, np.zeros((1, 1))), Ts, method="zoh")
         self._Ad, self._Bd = np.asarray(Ad), np.asarray(Bd).reshape(2, 1)

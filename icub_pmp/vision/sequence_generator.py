@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from typing import Iterator
+from typing import Iterator, Mapping
 
 import numpy as np
 
@@ -301,31 +301,55 @@ class SequenceGenerator:
     # ------------------------------------------------------------------ public
     def frames(self, spec: SequenceSpec) -> Iterator[SequenceFrame]:
         """Yield the frames of ``spec`` one by one (rendered on demand)."""
-        names = ("torso_pitch", "torso_roll", "torso_yaw", "neck_pitch", "neck_roll",
-                 "neck_yaw", "eyes_tilt")
         for k in range(spec.n_frames):
             pos = self._pose(spec, k)
-            left, lmask = self._render("left")
-            if self.right_camera:
-                right, rmask = self._render("right")
-            else:
-                right, rmask = np.zeros_like(left), np.zeros_like(lmask)
-            joints = {n: float(self.data.qpos[self._qadr[n]]) for n in names}
-            pl = float(self.data.qpos[self._qadr["l_eye_pan"]])
-            pr = float(self.data.qpos[self._qadr["r_eye_pan"]])
-            joints["eyes_version"] = 0.5 * (pl + pr)
-            joints["eyes_vergence"] = pl - pr
-            yield SequenceFrame(
-                index=k,
-                left=left,
-                right=right,
-                left_mask=lmask,
-                right_mask=rmask,
-                T_root_left=self.camera_pose("left"),
-                T_root_right=self.camera_pose("right"),
-                target_position=pos,
-                joints=joints,
-            )
+            yield self._capture(k, pos)
+
+    def frame_at(self, joints: Mapping[str, float], target_position: np.ndarray | None,
+                 index: int = 0) -> SequenceFrame:
+        """Render one frame with the robot at ``joints`` {name: rad} (e.g. a simulation's joint
+        states: the joints named take these values, the others keep the sequences' head-down
+        rest posture; the eyes as tilt, version, vergence) and the target ball at
+        ``target_position`` (3,) [m] in root_link (None: hidden)."""
+        q = self._base_q.copy()
+        for name, value in joints.items():
+            if name in self._qadr:
+                q[self._qadr[name]] = float(value)
+        if all(n in joints for n in ("eyes_tilt", "eyes_version", "eyes_vergence")):
+            self._set_head(q, float(joints["eyes_tilt"]), float(joints["eyes_version"]),
+                           float(joints["eyes_vergence"]))
+        self.data.qpos[:] = q
+        hidden = target_position is None
+        pos = np.array([0.0, 0.0, -5.0]) if hidden else np.asarray(target_position, float)
+        self.data.mocap_pos[self._mocap] = pos
+        self._mj.mj_forward(self.model, self.data)
+        return self._capture(index, np.full(3, np.nan) if hidden else pos)
+
+    def _capture(self, k: int, pos: np.ndarray) -> SequenceFrame:
+        """Render the current pose as frame ``k`` (target at ``pos``, NaN when hidden)."""
+        names = ("torso_pitch", "torso_roll", "torso_yaw", "neck_pitch", "neck_roll",
+                 "neck_yaw", "eyes_tilt")
+        left, lmask = self._render("left")
+        if self.right_camera:
+            right, rmask = self._render("right")
+        else:
+            right, rmask = np.zeros_like(left), np.zeros_like(lmask)
+        joints = {n: float(self.data.qpos[self._qadr[n]]) for n in names}
+        pl = float(self.data.qpos[self._qadr["l_eye_pan"]])
+        pr = float(self.data.qpos[self._qadr["r_eye_pan"]])
+        joints["eyes_version"] = 0.5 * (pl + pr)
+        joints["eyes_vergence"] = pl - pr
+        return SequenceFrame(
+            index=k,
+            left=left,
+            right=right,
+            left_mask=lmask,
+            right_mask=rmask,
+            T_root_left=self.camera_pose("left"),
+            T_root_right=self.camera_pose("right"),
+            target_position=pos,
+            joints=joints,
+        )
 
     def close(self) -> None:
         """Free the renderers' GL contexts."""

@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the gaze_controller node with config/gaze_controller.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" gaze_controller "$@"
