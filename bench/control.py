@@ -42,8 +42,8 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
-from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
-from icub_pmp.control.sim_scenarios import track_min_jerk  # noqa: E402
+from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
+from icub_sim_bridge.harness.sim_scenarios import track_min_jerk  # noqa: E402
 from icub_sim_bridge.sim_config import SimConfig  # noqa: E402
 from icub_sim_bridge.simulator import Simulator  # noqa: E402
 

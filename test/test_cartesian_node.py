@@ -12,7 +12,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import GoToPose, SolvePose
 from icub_pmp.kinematics import IcubModel
-from icub_pmp.nodes.conversions import duration_to_sec
+from icub_pmp.ros.conversions import duration_to_sec
 from icub_pmp.testing import NodeProcess, repo_root
 
 TARGET = (-0.30, 0.15, 0.05)  # in front of the right shoulder, root_link [m]

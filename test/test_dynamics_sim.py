@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
-from icub_pmp.control.sim_loop import SimLoop
-from icub_pmp.control.sim_scenarios import (
+from icub_sim_bridge.harness.sim_loop import SimLoop
+from icub_sim_bridge.harness.sim_scenarios import (
     press_left_hand_on_table,
     raised_posture,
     start_periodic_motion,

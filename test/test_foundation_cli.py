@@ -68,7 +68,8 @@ def test_hz_within_ten_percent_of_publisher_rate(posture_node, ros_probe):
 @pytest.fixture(scope="module")
 def reach_server(ros_domain_id):
     """A Reach server in another process that logs each request it receives."""
-    cmd = [str(repo_root() / "scripts/env.sh"), sys.executable, "test/support/reach_echo_server.py"]
+    cmd = [str(repo_root() / "scripts/env.sh"), sys.executable, "-m",
+           "icub_pmp.testing.reach_echo_server"]
     with NodeProcess(command=cmd) as proc:
         assert proc.wait_for_output("READY", 30), proc.output()
         yield proc

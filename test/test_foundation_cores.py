@@ -19,6 +19,7 @@ CORE_PACKAGES = [
     "icub_pmp.dynamics",
     "icub_pmp.cartesian",
     "icub_pmp.vision",
+    "icub_pmp.baselines",
     "icub_pmp.bags",
     "icub_pmp.demo.bag_series",
     "icub_pmp.demo.report",

@@ -10,12 +10,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from icub_pmp.vision import (
-    LoomingDetector,
-    MotionSegmenter,
-    MotionSegmenterConfig,
-    SyntheticSequence,
-)
+from icub_pmp.baselines import SyntheticSequence
+from icub_pmp.vision import LoomingDetector, MotionSegmenter, MotionSegmenterConfig
 from icub_pmp.vision.looming_detector import expansion
 
 

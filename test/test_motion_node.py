@@ -2,7 +2,7 @@
 
 The node runs as a subprocess (scripts/run_node.sh with config/motion_segmenter.yaml) in the
 session's private ROS domain; the test publishes real MuJoCo renders of the simulator's eye
-cameras (icub_pmp.vision.sequence_generator) with matching /joint_states and reads what the
+cameras (icub_sim_bridge.harness.sequence_generator) with matching /joint_states and reads what the
 node publishes. The last test runs it against the simulator node itself.
 """
 
@@ -20,10 +20,10 @@ from icub_interfaces.msg import MotionBlobs
 from icub_interfaces.srv import SetObjectPose
 from icub_pmp.config import config_dir
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, project_point
-from icub_pmp.nodes.conversions import array_to_image, make_joint_state, sec_to_time
+from icub_pmp.ros.conversions import array_to_image, make_joint_state, sec_to_time
 from icub_pmp.testing import NodeProcess, ros_environment
 from icub_pmp.vision.head_cameras import HeadCameras
-from icub_pmp.vision.sequence_generator import SequenceGenerator, SequenceSpec
+from icub_sim_bridge.harness.sequence_generator import SequenceGenerator, SequenceSpec
 
 PARAMS = config_dir() / "motion_segmenter.yaml"
 

@@ -12,14 +12,10 @@ import cv2
 import numpy as np
 import pytest
 
+from icub_pmp.baselines import SyntheticSequence, textured_image
 from icub_pmp.config import config_dir
 from icub_pmp.errors import ConfigError, InvalidInput
-from icub_pmp.vision import (
-    MotionSegmenter,
-    MotionSegmenterConfig,
-    SyntheticSequence,
-    textured_image,
-)
+from icub_pmp.vision import MotionSegmenter, MotionSegmenterConfig
 
 
 def _run(seq: SyntheticSequence, n: int, config: MotionSegmenterConfig | None = None):

@@ -10,7 +10,7 @@ from icub_pmp.errors import InvalidInput
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, project_point
 from icub_pmp.vision import MotionSegmenter, StereoTriangulator
 from icub_pmp.vision.head_cameras import HeadCameras
-from icub_pmp.vision.sequence_generator import SequenceGenerator, SequenceSpec
+from icub_sim_bridge.harness.sequence_generator import SequenceGenerator, SequenceSpec
 
 
 @pytest.fixture(scope="module")

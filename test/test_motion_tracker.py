@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from icub_pmp.baselines import SyntheticSequence, textured_image
 from icub_pmp.vision import (
     MotionBlob,
     MotionBlobs,
     MotionSegmenter,
     MotionSegmenterConfig,
-    SyntheticSequence,
     TargetTracker,
-    textured_image,
 )
 
 

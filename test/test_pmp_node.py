@@ -13,7 +13,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import Reach
 from icub_pmp.kinematics import IcubModel
-from icub_pmp.nodes.conversions import duration_to_sec, make_joint_state
+from icub_pmp.ros.conversions import duration_to_sec, make_joint_state
 from icub_pmp.testing import NodeProcess, repo_root
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)

@@ -17,12 +17,13 @@ from dataclasses import dataclass, field
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 
-__all__ = ["register", "run", "ReachGoal", "parse_reach_goal"]
+__all__ = ["register", "run", "ReachArgs", "parse_reach_args"]
 
 
 @dataclass(frozen=True)
-class ReachGoal:
-    """A validated reach goal: per hand (x, y, z) [m] and optional quaternion (w, x, y, z)."""
+class ReachArgs:
+    """The parsed `icub reach` arguments: per hand (x, y, z) [m] and optional quaternion
+    (w, x, y, z)."""
 
     positions: dict[str, tuple[float, float, float]]
     orientations: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
@@ -51,10 +52,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def parse_reach_goal(
+def parse_reach_args(
     targets: list[str], frame: str = "root_link", use_torso: bool = False,
     tau: float = 0.0, simulate_only: bool = False,
-) -> ReachGoal:
+) -> ReachArgs:
     """Validate the command-line goal (raises InvalidInput / UnknownName)."""
     if not math.isfinite(tau) or tau < 0:
         raise InvalidInput(f"--tau must be a finite duration >= 0 s, got {tau}")
@@ -85,10 +86,10 @@ def parse_reach_goal(
             orientations[hand] = (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
     if orientations and set(orientations) != set(positions):
         raise InvalidInput("give an orientation for every hand or for none")
-    return ReachGoal(positions, orientations, frame, use_torso, tau, simulate_only)
+    return ReachArgs(positions, orientations, frame, use_torso, tau, simulate_only)
 
 
-def build_request(goal: ReachGoal):  # noqa: ANN201 - ROS type imported lazily
+def build_request(goal: ReachArgs):  # noqa: ANN201 - ROS type imported lazily
     """The icub_interfaces/srv/Reach request for ``goal``."""
     from icub_interfaces.srv import Reach
 
@@ -111,7 +112,7 @@ def build_request(goal: ReachGoal):  # noqa: ANN201 - ROS type imported lazily
 
 def run(args: argparse.Namespace) -> int:
     """Validate, call the service, print the answer; exit 1 if the plan failed."""
-    goal = parse_reach_goal(args.targets, args.frame, args.torso, args.tau, args.simulate)
+    goal = parse_reach_args(args.targets, args.frame, args.torso, args.tau, args.simulate)
     from icub_interfaces.srv import Reach
     from icub_pmp.cli.session import cli_node, spin_until
 

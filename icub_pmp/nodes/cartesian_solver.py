@@ -32,7 +32,6 @@ from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import GoToPose, SolvePose
 from icub_pmp.cartesian import (
-    CartesianNodeConfig,
     IkConfig,
     IkSolution,
     IkSolver,
@@ -44,17 +43,18 @@ from icub_pmp.cartesian import (
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_model import IcubModel
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_pmp.nodes.conversions import (
+from icub_pmp.kinematics.rotations import quat_wxyz_to_matrix
+from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
+from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     joint_state_field,
     make_joint_state,
     point_to_array,
     pose_to_arrays,
-    quat_wxyz_to_matrix,
     validate_joint_state,
 )
-from icub_pmp.nodes.node_runner import run_node
-from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
+from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["CartesianSolverNode", "main"]
 

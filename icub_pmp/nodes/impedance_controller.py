@@ -42,14 +42,14 @@ from trajectory_msgs.msg import JointTrajectory
 from icub_pmp.control.impedance_controller import ImpedanceController
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
-from icub_pmp.nodes.conversions import (
+from icub_pmp.ros.conversions import (
     joint_state_arrays,
     time_to_sec,
     trajectory_extras,
     trajectory_to_arrays,
 )
-from icub_pmp.nodes.node_runner import spin_node
-from icub_pmp.nodes.raw_messages import (
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.raw_messages import (
     RawJointStateReader,
     RawJointStateWriter,
     read_joint_state,

@@ -31,14 +31,14 @@ from icub_interfaces.msg import MotionBlob as MotionBlobMsg
 from icub_interfaces.msg import MotionBlobs as MotionBlobsMsg
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
-from icub_pmp.nodes.conversions import (
+from icub_pmp.ros.conversions import (
     array_to_image,
     image_to_array,
     joint_state_field,
     time_to_sec,
     validate_joint_state,
 )
-from icub_pmp.nodes.node_runner import run_node
+from icub_pmp.ros.node_runner import run_node
 from icub_pmp.vision import (
     MotionBlobs,
     MotionSegmenter,

@@ -35,17 +35,17 @@ from trajectory_msgs.msg import JointTrajectory
 from icub_interfaces.srv import Reach
 from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
-from icub_pmp.nodes.conversions import (
+from icub_pmp.kinematics.rotations import quat_wxyz_to_matrix
+from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
+from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     joint_state_field,
     pose_to_arrays,
     positions_to_path,
-    quat_wxyz_to_matrix,
     validate_joint_state,
 )
-from icub_pmp.nodes.node_runner import run_node
-from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
-from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
+from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["PmpPlannerNode", "main"]
 

@@ -13,8 +13,8 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_pmp.nodes.conversions import make_joint_state
-from icub_pmp.nodes.node_runner import run_node
+from icub_pmp.ros.conversions import make_joint_state
+from icub_pmp.ros.node_runner import run_node
 
 __all__ = ["PosturePublisher", "main"]
 

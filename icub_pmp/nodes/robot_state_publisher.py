@@ -28,9 +28,9 @@ from tf2_msgs.msg import TFMessage
 
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.link_transforms import LinkTransform, LinkTransforms
-from icub_pmp.kinematics.robot_state_publisher_config import RobotStatePublisherConfig
-from icub_pmp.nodes.conversions import joint_state_field, validate_joint_state
-from icub_pmp.nodes.node_runner import spin_node
+from icub_pmp.ros.conversions import joint_state_field, validate_joint_state
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.robot_state_publisher_config import RobotStatePublisherConfig
 
 __all__ = ["RobotStatePublisher", "main", "LATCHED_QOS", "TF_QOS"]
 

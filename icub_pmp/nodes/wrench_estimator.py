@@ -43,16 +43,12 @@ from icub_pmp.dynamics.wrench_estimator import WrenchEstimator
 from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.kinematics.robot_spec import HANDS
-from icub_pmp.nodes.conversions import (
-    joint_state_arrays,
-    raw_header_stamp_ns,
-    set_wrench,
-    wrench_to_array,
-)
-from icub_pmp.nodes.node_runner import spin_node
-from icub_pmp.nodes.raw_messages import (
+from icub_pmp.ros.conversions import joint_state_arrays, set_wrench, wrench_to_array
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.raw_messages import (
     RawJointStateReader,
     RawJointStateWriter,
+    raw_header_stamp_ns,
     raw_wrench_stamped,
 )
 

@@ -59,12 +59,12 @@ from std_srvs.srv import SetBool
 
 from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
 from icub_pmp.errors import IcubPmpError, InvalidInput
-from icub_pmp.nodes.conversions import (
+from icub_pmp.ros.conversions import (
     pose_to_arrays,
     validate_joint_state,
     wrench_to_array,
 )
-from icub_pmp.nodes.raw_messages import (
+from icub_pmp.ros.raw_messages import (
     RawJointState,
     RawJointStateReader,
     RawJointStateWriter,

@@ -1,0 +1,13 @@
+"""The ROS adapter layer: what the node executables (:mod:`icub_pmp.nodes`), the ``icub`` CLI
+and the demo share, and nothing the numerical cores may import.
+
+- :mod:`.conversions`: message <-> numpy conversions and message validation;
+- :mod:`.raw_messages`: the 1 kHz messages read and written as CDR bytes;
+- :mod:`.parameters`: a node's configuration dataclasses declared as ROS parameters;
+- :mod:`.node_runner`: the ``main()`` of every node; :mod:`.subscriber_wait`: waiting for a
+  matched subscriber; :mod:`.qos`: QoS matching; :mod:`.msg_types`: interface names;
+- :mod:`.bag_recorder`, :mod:`.bag_player`: ``icub bag record`` / ``play`` on rclpy;
+- :mod:`.probe`: an in-process node for tests and the demo;
+- node configurations that are not algorithms (:mod:`.cartesian_node_config`,
+  :mod:`.robot_state_publisher_config`, :mod:`.pmp_node_config`).
+"""
