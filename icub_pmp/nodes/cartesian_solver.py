@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any
 
 import numpy as np
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.time import Time
@@ -54,6 +54,7 @@ from icub_pmp.ros.conversions import (
     validate_joint_state,
 )
 from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["CartesianSolverNode", "main"]
@@ -76,15 +77,8 @@ class CartesianSolverNode(Node):
 
     def __init__(self) -> None:
         super().__init__("cartesian_solver")
-        for cls in _CONFIGS:
-            for f in dataclasses.fields(cls):
-                default = getattr(cls(), f.name)
-                value = list(default) if isinstance(default, tuple) else default
-                self.declare_parameter(f.name, value, ParameterDescriptor(description=cls.__name__))
-        try:
-            self.ik_config, self.mj_config, self.node_config = self._configs({})
-        except IcubPmpError as exc:
-            raise SystemExit(f"cartesian_solver: bad parameters: {exc}") from exc
+        self.params = ConfigParameters(self, _CONFIGS, check=_check_rest_posture,
+                                       on_change=self._on_config_change)
         self.model = IcubModel()
         self.solver = IkSolver(self.model, self.ik_config)
         for chain in self.node_config.prebuild_chains:
@@ -93,7 +87,6 @@ class CartesianSolverNode(Node):
                 f"built the eq 11 NLP of {chain} ({prob.chain.n} DoF, "
                 f"{'compiled C' if prob.compiled else 'CasADi VM'})"
             )
-        self.add_on_set_parameters_callback(self._on_set_parameters)
         self._latest: dict[str, float] | None = None
         self._active: _Active | None = None
         self.create_subscription(
@@ -112,32 +105,23 @@ class CartesianSolverNode(Node):
         )
 
     # ------------------------------------------------------------------ parameters
-    def _configs(
-        self, changes: dict[str, Any]
-    ) -> tuple[IkConfig, MinJerkConfig, CartesianNodeConfig]:
-        params = {}
-        for cls in _CONFIGS:
-            for f in dataclasses.fields(cls):
-                params[f.name] = self.get_parameter(f.name).value
-        params.update(changes)
-        ik = IkConfig.from_dict(params, ignore_unknown=True)
-        mj = MinJerkConfig.from_dict(params, ignore_unknown=True)
-        nc = CartesianNodeConfig.from_dict(params, ignore_unknown=True)
-        RobotSpec.load().posture(ik.rest_posture)  # raises UnknownName for a bad posture
-        return ik, mj, nc
+    @property
+    def ik_config(self) -> IkConfig:
+        """The solver's configuration (eq 11, IPOPT)."""
+        return self.params.get(IkConfig)
 
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        names = {f.name for cls in _CONFIGS for f in dataclasses.fields(cls)}
-        changes = {p.name: p.value for p in params if p.name in names}
-        if not changes:
-            return SetParametersResult(successful=True)
-        try:
-            ik, mj, nc = self._configs(changes)
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        self.solver.reconfigure(ik)
-        self.ik_config, self.mj_config, self.node_config = ik, mj, nc
-        return SetParametersResult(successful=True)
+    @property
+    def mj_config(self) -> MinJerkConfig:
+        """The min-jerk trajectory configuration."""
+        return self.params.get(MinJerkConfig)
+
+    @property
+    def node_config(self) -> CartesianNodeConfig:
+        """The node's own parameters."""
+        return self.params.get(CartesianNodeConfig)
+
+    def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
+        self.solver.reconfigure(new[0])
 
     # ------------------------------------------------------------------ inputs
     def _on_joint_states(self, msg: JointState) -> None:
@@ -252,8 +236,17 @@ class CartesianSolverNode(Node):
         )
 
 
+def _check_rest_posture(configs: tuple) -> None:
+    """The rest posture of the IkConfig must be a posture of config/robot.yaml."""
+    RobotSpec.load().posture(configs[0].rest_posture)  # raises UnknownName
+
+
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp cartesian_solver``)."""
+    # IPOPT's linear solver (MUMPS) is built with OpenMP; on a 10-variable problem its thread
+    # pool costs more than it gives (about 20 % per solve). Read when the IPOPT plugin loads
+    # (the first NLP is built in the node's constructor); a value set by the user wins.
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
     run_node(CartesianSolverNode, args, "cartesian_solver")
 
 if __name__ == "__main__":

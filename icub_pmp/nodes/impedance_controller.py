@@ -31,7 +31,6 @@ import time
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -49,6 +48,7 @@ from icub_pmp.ros.conversions import (
     trajectory_to_arrays,
 )
 from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.raw_messages import (
     RawJointStateReader,
     RawJointStateWriter,
@@ -65,13 +65,9 @@ class ImpedanceControllerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("impedance_controller")
-        defaults = ImpedanceControllerConfig()
-        for name, value in defaults.to_dict().items():
-            self.declare_parameter(name, value, ParameterDescriptor(
-                description=f"ImpedanceControllerConfig.{name} "
-                            "(see config/impedance_controller.yaml)"))
-        config = ImpedanceControllerConfig.from_dict(
-            {n: self.get_parameter(n).value for n in defaults.field_names()})
+        self.params = ConfigParameters(self, ImpedanceControllerConfig,
+                                       on_change=self._on_config_change)
+        config = self.params.config
         self.controller = ImpedanceController(config)
         self.names = list(self.controller.joint_names)
         self._js_names: list[str] | None = None
@@ -85,7 +81,6 @@ class ImpedanceControllerNode(Node):
         self._status = "no_estimate"
         self.steps = 0
         self.dropped = 0
-        self.add_on_set_parameters_callback(self._on_set_parameters)
 
         sd = qos_profile_sensor_data
         self.pub_effort = self.create_publisher(JointState, "/effort_command", sd)
@@ -119,23 +114,13 @@ class ImpedanceControllerNode(Node):
             f"{'lockstep' if config.lockstep else f'timer at {config.rate_hz} Hz'}")
 
     # ------------------------------------------------------------------ parameters
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        changes = {p.name: p.value for p in params
-                   if p.name in ImpedanceControllerConfig.field_names()}
-        if not changes:
-            return SetParametersResult(successful=True)
-        try:
-            cfg = ImpedanceControllerConfig.from_dict(
-                {**self.controller.config.to_dict(), **changes})
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        old = self.controller.config
-        self.controller.set_config(cfg)
-        if (old.lockstep, old.rate_hz) != (cfg.lockstep, cfg.rate_hz):
-            self._apply_stepping(cfg)
-        if old.mode != cfg.mode:
-            self.get_logger().info(f"mode {old.mode} -> {cfg.mode}")
-        return SetParametersResult(successful=True)
+    def _on_config_change(self, old: ImpedanceControllerConfig, new: ImpedanceControllerConfig,
+                          changed: frozenset[str]) -> None:
+        self.controller.set_config(new)
+        if (old.lockstep, old.rate_hz) != (new.lockstep, new.rate_hz):
+            self._apply_stepping(new)
+        if old.mode != new.mode:
+            self.get_logger().info(f"mode {old.mode} -> {new.mode}")
 
     def _apply_stepping(self, cfg: ImpedanceControllerConfig) -> None:
         if self._timer is not None:
@@ -292,7 +277,7 @@ class ImpedanceControllerNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp impedance_controller``)."""
-    spin_node(ImpedanceControllerNode, args)
+    spin_node(ImpedanceControllerNode, args, "impedance_controller")
 
 
 if __name__ == "__main__":

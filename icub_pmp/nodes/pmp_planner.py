@@ -16,7 +16,8 @@ successful, the movement is executed"). The predicted hand paths are always publ
 Target frames: empty or ``root_link``, or any frame of the iCub model (the target is then
 expressed in that frame at the start posture). Bad goals (NaN, unknown hand or frame, tau < 0,
 no hand, a zero quaternion) answer success=false with a message; the node never dies on a
-request. Parameters: config/pmp_planner.yaml (= :class:`icub_pmp.pmp.PmpConfig` + the node's).
+request. Parameters: config/pmp_planner.yaml (= :class:`icub_pmp.pmp.PmpConfig` +
+:class:`icub_pmp.ros.pmp_node_config.PmpNodeConfig`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,6 @@ import math
 import time
 
 from nav_msgs.msg import Path
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.service_introspection import ServiceIntrospectionState
@@ -33,7 +33,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import Reach
-from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.kinematics.rotations import quat_wxyz_to_matrix
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
@@ -45,40 +45,19 @@ from icub_pmp.ros.conversions import (
     validate_joint_state,
 )
 from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.pmp_node_config import PmpNodeConfig
 from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["PmpPlannerNode", "main"]
-
-#: parameters of the node itself (beyond PmpConfig): name -> (default, description)
-NODE_PARAMETERS = {
-    "plan_from_rest_without_state": (
-        True, "no /joint_states yet and no start_state: plan from 'rest' (not executed)"),
-    "joint_state_timeout": (0.0, "[s] older /joint_states count as missing (0 = any age)"),
-    "warm_up": (True, "build the bimanual+torso posture memory before serving"),
-    "subscriber_timeout": (
-        1.0, "[s, wall] wait up to this long for a subscriber on /joint_trajectory before "
-             "publishing a plan (discovery right after start-up)"),
-}
-
 
 class PmpPlannerNode(Node):
     """Serves /pmp/reach with a :class:`~icub_pmp.pmp.PmpPlanner`."""
 
     def __init__(self) -> None:
         super().__init__("pmp_planner")
-        defaults = PmpConfig().to_dict()
-        for name, value in defaults.items():
-            self.declare_parameter(name, value, ParameterDescriptor(
-                description=f"PmpConfig.{name} (see config/pmp_planner.yaml)"))
-        for name, (value, text) in NODE_PARAMETERS.items():
-            self.declare_parameter(name, value, ParameterDescriptor(description=text))
-        try:
-            self.config = PmpConfig.from_dict(
-                {n: self.get_parameter(n).value for n in defaults})
-        except ConfigError as exc:
-            raise SystemExit(f"pmp_planner: bad parameters: {exc}") from exc
-        self._check_node_parameters({n: self.get_parameter(n).value for n in NODE_PARAMETERS})
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.params = ConfigParameters(self, (PmpConfig, PmpNodeConfig),
+                                       on_change=self._on_config_change)
         self.planner = PmpPlanner(self.config)
         self._names = self.planner.provider.joint_names
         self._valid_state_names = set(self.planner.spec.actuated_joints)
@@ -92,7 +71,7 @@ class PmpPlannerNode(Node):
             h: self.create_publisher(Path, f"/pmp/predicted_path/{h}_hand", reliable)
             for h in HANDS
         }
-        if self.get_parameter("warm_up").value:
+        if self.node_config.warm_up:
             t0 = time.perf_counter()
             self.planner.warm_up()
             self.get_logger().info(
@@ -105,30 +84,19 @@ class PmpPlannerNode(Node):
         self.get_logger().info("serving /pmp/reach")
 
     # ------------------------------------------------------------------ parameters
-    @staticmethod
-    def _check_node_parameters(values: dict) -> None:
-        for name in ("joint_state_timeout", "subscriber_timeout"):
-            t = values.get(name, 0.0)
-            if not isinstance(t, float) or not math.isfinite(t) or t < 0:
-                raise ConfigError(f"{name}: expected a float >= 0 s, got {t!r}")
+    @property
+    def config(self) -> PmpConfig:
+        """The planner's configuration."""
+        return self.params.get(PmpConfig)
 
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        current = {n: self.get_parameter(n).value for n in PmpConfig.field_names()}
-        node_values = {n: self.get_parameter(n).value for n in NODE_PARAMETERS}
-        for p in params:
-            if p.name in current:
-                current[p.name] = p.value
-            elif p.name in node_values:
-                node_values[p.name] = p.value
-        try:
-            config = PmpConfig.from_dict(current)
-            self._check_node_parameters(node_values)
-        except ConfigError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        if config != self.config:
-            self.config = config
-            self.planner = PmpPlanner(config, provider=self.planner.provider)
-        return SetParametersResult(successful=True)
+    @property
+    def node_config(self) -> PmpNodeConfig:
+        """The node's own parameters."""
+        return self.params.get(PmpNodeConfig)
+
+    def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
+        if new[0] != old[0]:
+            self.planner = PmpPlanner(new[0], provider=self.planner.provider)
 
     # ------------------------------------------------------------------ joint states
     def _on_joint_states(self, msg: JointState) -> None:
@@ -141,7 +109,7 @@ class PmpPlannerNode(Node):
         self._latest_time = time.monotonic()
 
     def _current_state(self) -> dict[str, float] | None:
-        timeout = float(self.get_parameter("joint_state_timeout").value)
+        timeout = self.node_config.joint_state_timeout
         if self._latest is None:
             return None
         if timeout > 0 and time.monotonic() - self._latest_time > timeout:
@@ -172,7 +140,7 @@ class PmpPlannerNode(Node):
         execute = plan.success and not req.simulate_only and not assumed
         listening = ""
         if execute:
-            wait = float(self.get_parameter("subscriber_timeout").value)
+            wait = self.node_config.subscriber_timeout
             listening = subscriber_note(wait_for_subscribers(self.trajectory_pub, wait), wait)
             self.trajectory_pub.publish(res.trajectory)
         stamp = self.get_clock().now().to_msg()
@@ -203,7 +171,7 @@ class PmpPlannerNode(Node):
             return start, False, note
         if current is not None:
             return dict(current), False, ""
-        if not self.get_parameter("plan_from_rest_without_state").value:
+        if not self.node_config.plan_from_rest_without_state:
             raise InvalidInput("no /joint_states received yet and no start_state given")
         return (dict(self.planner.spec.posture("rest")), True,
                 " (no /joint_states received: planned from the rest posture)")

@@ -4,43 +4,95 @@
 default single-threaded executor (``rclpy.spin``: service-driven and camera-rate nodes).
 
 ``spin_node`` spins an ``EventsExecutor`` (several times the message throughput of the
-default executor, ENVIRONMENT.md) with ``spin_once`` in a loop: its ``spin()`` in the Jazzy
-wheel neither processes callbacks reliably nor returns on SIGINT. Ctrl-C and external
-shutdowns end quietly.
+default executor) with ``spin_once`` in a loop: its ``spin()`` in the Jazzy wheel neither
+processes callbacks reliably nor returns on SIGINT. It can run a worker beside the executor
+(the simulator's physics loop) on its own thread; the node then stops when the worker returns
+or fails. Ctrl-C and external shutdowns end quietly; a node refusing its parameters
+(:class:`~icub_pmp.errors.ConfigError`) exits with a one-line message.
 """
 
 from __future__ import annotations
 
-from typing import Callable
+import threading
+from typing import Callable, TypeVar
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 
+from icub_pmp.errors import ConfigError
+
 __all__ = ["spin_node", "run_node"]
 
+N = TypeVar("N", bound=Node)
 
-def spin_node(factory: Callable[[], Node], args: list[str] | None = None) -> None:
+#: a worker: ``worker(node, should_stop)`` runs until ``should_stop()`` is True
+Worker = Callable[[N, Callable[[], bool]], None]
+
+
+def spin_node(
+    factory: Callable[[], N],
+    args: list[str] | None = None,
+    name: str = "node",
+    worker: Worker | None = None,
+) -> None:
     """``rclpy.init(args)``, build the node with ``factory()``, spin until shutdown, then
-    destroy the node and shut rclpy down (``try_shutdown``)."""
+    destroy the node and shut rclpy down (``try_shutdown``).
+
+    ``worker(node, should_stop)``, if given, runs on its own thread from the start; the
+    executor keeps spinning on the main thread (where rclpy's signal handling works). When the
+    worker fails, the failure is logged and the process exits with status 1.
+    """
     rclpy.init(args=args)
     node = None
     executor = None
+    stop = threading.Event()
+    thread = None
+    failed: list[BaseException] = []
     try:
         node = factory()
         executor = EventsExecutor()
         executor.add_node(node)
-        while rclpy.ok():
+        if worker is not None:
+            thread = threading.Thread(target=_run_worker, args=(worker, node, stop, failed),
+                                      name=f"{name}-worker")
+            thread.start()
+        # spin_once in a loop: EventsExecutor.spin() of the Jazzy wheel never returns on
+        # SIGINT, and waking it from another thread deadlocks
+        while rclpy.ok() and (thread is None or thread.is_alive()):
             executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except ConfigError as exc:
+        raise SystemExit(f"{name}: {exc}") from exc
     finally:
+        stop.set()
+        if thread is not None:
+            thread.join(timeout=10.0)
         if node is not None:
             node.destroy_node()
         if executor is not None:
             executor.shutdown()
         rclpy.try_shutdown()
+    if failed:
+        raise SystemExit(1)
+
+
+def _run_worker(worker: Worker, node: Node, stop: threading.Event,
+                failed: list[BaseException]) -> None:
+    """The worker thread: on a failure (not during shutdown) log it and record it."""
+    def should_stop() -> bool:
+        return stop.is_set() or not rclpy.ok()
+
+    try:
+        worker(node, should_stop)
+    except Exception as exc:
+        if should_stop():
+            return  # shutting down: publishers may already be invalid
+        failed.append(exc)
+        node.get_logger().fatal(f"{threading.current_thread().name} failed: "
+                                f"{type(exc).__name__}: {exc}")
 
 
 def run_node(factory: Callable[[], Node], args: list[str] | None = None,
@@ -48,8 +100,6 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
     """``rclpy.init(args)``, build the node with ``factory()``, ``rclpy.spin`` until shutdown
     (Ctrl-C and external shutdowns end quietly), then destroy it and ``try_shutdown``. A
     :class:`~icub_pmp.errors.ConfigError` while building exits with a one-line message."""
-    from icub_pmp.errors import ConfigError
-
     rclpy.init(args=args)
     node = None
     try:
