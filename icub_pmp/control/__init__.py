@@ -4,6 +4,7 @@ commands and holds, safety, and the lockstep estimate gate of the node. No ROS i
 :mod:`icub_sim_bridge.harness.sim_loop` closes the loop in-process with the simulator and the
 wrench estimator."""
 
+from icub_pmp.control.estimate_gate import EstimateGate
 from icub_pmp.control.impedance_controller import STATUSES, ControlOutput, ImpedanceController
 from icub_pmp.control.impedance_controller_config import (
     FEEDFORWARDS,
@@ -15,6 +16,7 @@ from icub_pmp.control.setpoint_generator import Setpoint, SetpointGenerator
 from icub_pmp.control.torque_pid import TorquePid
 
 __all__ = [
+    "EstimateGate",
     "STATUSES",
     "ControlOutput",
     "ImpedanceController",

@@ -27,8 +27,6 @@ both are logged. All :class:`ImpedanceControllerConfig` parameters can change at
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 from builtin_interfaces.msg import Time
 from rclpy.clock import Clock, ClockType
@@ -38,6 +36,7 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
+from icub_pmp.control.estimate_gate import EstimateGate
 from icub_pmp.control.impedance_controller import ImpedanceController
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
@@ -73,8 +72,7 @@ class ImpedanceControllerNode(Node):
         self._js_names: list[str] | None = None
         self._js_idx: np.ndarray | None = None
         self._est_names: list[str] | None = None
-        self._est_ns = -1
-        self._pending: tuple[int, object, np.ndarray, np.ndarray] | None = None
+        self.gate: EstimateGate[tuple[float, np.ndarray, np.ndarray, Time]] = EstimateGate()
         self._latest: tuple[float, np.ndarray, np.ndarray] | None = None
         self._latest_new = False
         self._t_last: float | None = None
@@ -103,7 +101,6 @@ class ImpedanceControllerNode(Node):
         self.create_timer(0.05, self._on_watchdog)
         # wall-clock timer: a joint state waiting for its estimate is answered without it
         # after estimate_timeout of wall time (the simulator waits for us: sim time stands)
-        self._pending_since = 0.0
         self.create_timer(0.005, self._on_pending_timeout,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._timer = None
@@ -155,11 +152,12 @@ class ImpedanceControllerNode(Node):
             self._latest = (ns * 1e-9, q, v)
             self._latest_new = True
             return
-        if cfg.wait_for_estimate and cfg.torque_loop and self._est_ns < ns:
-            self._pending = (ns, stamp, q, v)
-            self._pending_since = time.monotonic()
-            return
-        self._step(ns * 1e-9, q, v, stamp)
+        sample = (ns * 1e-9, q, v, stamp)
+        if cfg.wait_for_estimate and cfg.torque_loop:
+            sample = self.gate.offer(ns, sample)
+            if sample is None:
+                return  # waits for its estimate
+        self._step(*sample)
 
     def _on_estimate(self, data: bytes) -> None:
         try:
@@ -172,11 +170,9 @@ class ImpedanceControllerNode(Node):
         except IcubPmpError as exc:
             self._warn(f"/estimated_joint_torques dropped: {exc}")
             return
-        self._est_ns = max(self._est_ns, ns)
-        p = self._pending
-        if p is not None and p[0] <= self._est_ns:
-            self._pending = None
-            self._step(p[0] * 1e-9, p[2], p[3], p[1])
+        sample = self.gate.estimate(ns)
+        if sample is not None:
+            self._step(*sample)
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         try:
@@ -229,13 +225,10 @@ class ImpedanceControllerNode(Node):
         self._step(t, q, v, self.get_clock().now().to_msg())
 
     def _on_pending_timeout(self) -> None:
-        p = self._pending
-        if p is None:
-            return
-        if time.monotonic() - self._pending_since > self.controller.config.estimate_timeout:
-            self._pending = None
+        sample = self.gate.expired(self.controller.config.estimate_timeout)
+        if sample is not None:
             self._warn("no estimate for the pending joint state: answered without it")
-            self._step(p[0] * 1e-9, p[2], p[3], p[1])
+            self._step(*sample)
 
     def _on_watchdog(self) -> None:
         now = self.get_clock().now().nanoseconds * 1e-9
