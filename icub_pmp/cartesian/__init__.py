@@ -5,6 +5,7 @@ iCub); no ROS imports.
 """
 
 from icub_pmp.cartesian.arm_linear_constraints import ArmLinearConstraints, LinearConstraints
+from icub_pmp.cartesian.cartesian_controller import CartesianController, CartesianMotion
 from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
 from icub_pmp.cartesian.ik_config import IkConfig
 from icub_pmp.cartesian.ik_problem import IkProblem, NlpConstraint
@@ -18,6 +19,8 @@ from icub_pmp.cartesian.min_jerk_generator import MinJerkGenerator
 from icub_pmp.cartesian.sampled_trajectory import GeneratorState, SampledTrajectory
 
 __all__ = [
+    "CartesianController",
+    "CartesianMotion",
     "ArmLinearConstraints",
     "LinearConstraints",
     "CasadiKinematics",

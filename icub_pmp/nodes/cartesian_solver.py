@@ -4,10 +4,10 @@ Services
 - ``/cartesian/solve_pose`` (icub_interfaces/srv/SolvePose): eq 11 solved by IPOPT
   (:class:`~icub_pmp.cartesian.IkSolver`); answers joints, residuals, solve time; moves nothing.
 - ``/cartesian/go_to_pose`` (icub_interfaces/srv/GoToPose): the same solve, then a
-  multi-referential minimum-jerk trajectory (:class:`~icub_pmp.cartesian.MinJerkGenerator`)
-  published on ``/joint_trajectory`` for the impedance controller. A goal given while a
+  multi-referential minimum-jerk trajectory published on ``/joint_trajectory`` for the
+  impedance controller (:class:`~icub_pmp.cartesian.CartesianController`: a goal given while a
   trajectory of the same chain runs starts from that trajectory's state at the current time,
-  so the motion bends smoothly toward the new target.
+  so the motion bends smoothly toward the new target).
 
 Subscribes ``/joint_states`` (start configuration). Parameters: the fields of
 :class:`IkConfig`, :class:`MinJerkConfig` and :class:`CartesianNodeConfig`
@@ -18,7 +18,6 @@ them, and IPOPT is bounded in iterations and wall time.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 from typing import Any
@@ -26,19 +25,17 @@ from typing import Any
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import GoToPose, SolvePose
 from icub_pmp.cartesian import (
+    CartesianController,
     IkConfig,
     IkSolution,
     IkSolver,
     KinematicChain,
     MinJerkConfig,
-    MinJerkGenerator,
-    SampledTrajectory,
 )
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_model import IcubModel
@@ -62,16 +59,6 @@ __all__ = ["CartesianSolverNode", "main"]
 _CONFIGS = (IkConfig, MinJerkConfig, CartesianNodeConfig)
 
 
-@dataclasses.dataclass
-class _Active:
-    """The trajectory last published: start time, samples, chain, held configuration."""
-
-    start: Time
-    trajectory: SampledTrajectory
-    chain: str
-    q_hold: np.ndarray
-
-
 class CartesianSolverNode(Node):
     """Serve /cartesian/solve_pose and /cartesian/go_to_pose; publish /joint_trajectory."""
 
@@ -81,6 +68,7 @@ class CartesianSolverNode(Node):
                                        on_change=self._on_config_change)
         self.model = IcubModel()
         self.solver = IkSolver(self.model, self.ik_config)
+        self.controller = CartesianController(self.solver, self.mj_config)
         for chain in self.node_config.prebuild_chains:
             prob = self.solver.problem(chain)
             self.get_logger().info(
@@ -88,7 +76,6 @@ class CartesianSolverNode(Node):
                 f"{'compiled C' if prob.compiled else 'CasADi VM'})"
             )
         self._latest: dict[str, float] | None = None
-        self._active: _Active | None = None
         self.create_subscription(
             JointState, "joint_states", self._on_joint_states, qos_profile_sensor_data
         )
@@ -122,6 +109,7 @@ class CartesianSolverNode(Node):
 
     def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
         self.solver.reconfigure(new[0])
+        self.controller.config = new[1]
 
     # ------------------------------------------------------------------ inputs
     def _on_joint_states(self, msg: JointState) -> None:
@@ -136,15 +124,15 @@ class CartesianSolverNode(Node):
 
     def _start_q(self, start_state: JointState) -> np.ndarray:
         """Full configuration (nq,) from the request's start_state or the latest joints."""
-        base = self.model.posture("rest")
-        if self._latest is not None:
-            base = self.model.q_from_dict(self._latest, default=base)
-        if len(start_state.name) > 0:
-            validate_joint_state(start_state)
-            return self.model.q_from_dict(joint_state_field(start_state), default=base)
-        if self._latest is None:
-            raise InvalidInput("no /joint_states received yet and the request has no start_state")
-        return base
+        return self.controller.start_configuration(self._latest, self._start_state(start_state))
+
+    @staticmethod
+    def _start_state(start_state: JointState) -> dict[str, float] | None:
+        """The request's start_state as {joint: angle} (None when empty), validated."""
+        if len(start_state.name) == 0:
+            return None
+        validate_joint_state(start_state)
+        return joint_state_field(start_state)
 
     def _target(self, req: Any) -> tuple[str, np.ndarray, np.ndarray | None]:
         chain = req.chain or self.node_config.default_chain
@@ -194,45 +182,26 @@ class CartesianSolverNode(Node):
         return resp
 
     def _go_to_pose(self, req: GoToPose.Request, resp: GoToPose.Response) -> None:
-        T = float(req.trajectory_time) or self.mj_config.trajectory_time
-        if not (math.isfinite(T) and T >= 10 * self.mj_config.period):
-            raise InvalidInput(
-                f"trajectory_time: expected 0 (default) or >= {10 * self.mj_config.period} s, "
-                f"got {req.trajectory_time}"
-            )
+        self.controller.trajectory_time(req.trajectory_time)  # checked before the target
         chain, position, rotation = self._target(req)
         now = self.get_clock().now()
-        state = None
-        act = self._active
-        if act is not None and act.chain == chain and len(req.start_state.name) == 0:
-            elapsed = (now - act.start).nanoseconds * 1e-9
-            if 0.0 <= elapsed < act.trajectory.duration:
-                state = act.trajectory.state_at(elapsed)
-        if state is not None:
-            q_start = act.q_hold.copy()
-            q_start[self.model.indices(act.trajectory.joint_names)] = state.q
-        else:
-            q_start = self._start_q(req.start_state)
-        sol = self.solver.solve(chain, position, rotation, q_start)
-        self._fill(resp, sol)
-        if not sol.success:
+        motion = self.controller.go_to(
+            chain, position, rotation, now.nanoseconds * 1e-9,
+            trajectory_time=req.trajectory_time, measured=self._latest,
+            start_state=self._start_state(req.start_state))
+        self._fill(resp, motion.solution)
+        traj = motion.trajectory
+        if traj is None:
             return
-        gen = MinJerkGenerator(self.model, self.solver.problem(chain).chain, self.mj_config, T)
-        gen.reset(q_start)
-        if state is not None:
-            gen.restore(state)
-        gen.set_target(sol.q)
-        traj = gen.rollout()
         msg = arrays_to_trajectory(traj.joint_names, traj.t, traj.q, traj.qd, stamp=now.to_msg())
         wait = self.node_config.subscriber_timeout
         listening = subscriber_note(wait_for_subscribers(self.traj_pub, wait), wait)
         self.traj_pub.publish(msg)
-        self._active = _Active(now, traj, chain, q_start)
         resp.trajectory = msg
         resp.message = (
-            f"{sol.message}; trajectory of {len(traj.t)} points over {traj.duration:.2f} s"
-            + (" (continued from the running one)" if state is not None else "")
-            + listening
+            f"{motion.solution.message}; trajectory of {len(traj.t)} points over "
+            f"{traj.duration:.2f} s" + (" (continued from the running one)" if motion.continued
+                                       else "") + listening
         )
 
 
