@@ -7,14 +7,6 @@ from icub_pmp.control import EstimateGate
 MS = 1_000_000  # [ns]
 
 
-class _Clock:
-    def __init__(self) -> None:
-        self.t = 0.0
-
-    def __call__(self) -> float:
-        return self.t
-
-
 def test_a_joint_state_with_its_estimate_there_goes_at_once():
     gate = EstimateGate()
     assert gate.estimate(5 * MS) is None  # nothing held
@@ -39,13 +31,12 @@ def test_the_newest_joint_state_replaces_a_held_one():
     assert gate.estimate(3 * MS) == "js2"
 
 
-def test_a_held_joint_state_is_released_after_the_wall_time_timeout():
+def test_a_held_joint_state_is_released_after_the_wall_time_timeout(fake_clock):
     """Simulated time stands still while the simulator waits: only wall time can release."""
-    clock = _Clock()
-    gate = EstimateGate(clock)
+    gate = EstimateGate(fake_clock)
     gate.offer(7 * MS, "js7")
-    clock.t = 0.05
+    fake_clock.t += 0.05
     assert gate.expired(0.1) is None and gate.holding
-    clock.t = 0.11
+    fake_clock.t += 0.06
     assert gate.expired(0.1) == "js7"
     assert not gate.holding and gate.expired(0.1) is None

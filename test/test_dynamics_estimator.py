@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from icub_pmp.config import config_dir
 from icub_pmp.dynamics.contact_detector import ContactDetector
 from icub_pmp.dynamics.ft_dynamics_model import FtDynamicsModel
 from icub_pmp.dynamics.wrench_estimator import WrenchEstimator
@@ -28,13 +27,6 @@ def icub() -> IcubModel:
 def _est(**kw) -> WrenchEstimator:
     kw.setdefault("ft_convention", "parent_on_child")
     return WrenchEstimator(WrenchEstimatorConfig(**kw))
-
-
-def test_shipped_yaml_loads():
-    """config/wrench_estimator.yaml loads into WrenchEstimatorConfig."""
-    cfg = WrenchEstimatorConfig.from_yaml(config_dir() / "wrench_estimator.yaml",
-                                          "wrench_estimator")
-    assert cfg.rfrr_features in (200, 500, 1000)
 
 
 def test_external_wrench_and_torques_recovered(truth, icub):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import time
 
 import pytest
 import yaml
@@ -93,8 +92,12 @@ def test_reach_bad_input_exits_with_one_line_and_sends_nothing(reach_server, arg
     err = out.stderr.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("icub: error:") and expected in err[0], out.stderr
     assert "Traceback" not in out.stderr
-    time.sleep(0.5)
-    assert reach_server.output().count("REQUEST") == before
+    # a good goal after it is the next request the server logs: the bad one sent nothing
+    tau = 100.0 + before  # names this request in the server's log
+    ok = icub("reach", "right=-0.3,0.1,0.0", "--tau", str(tau))
+    assert ok.returncode == 0, ok.stderr
+    assert reach_server.wait_for_output(f"tau={tau}", 30), reach_server.output()
+    assert reach_server.output().count("REQUEST") == before + 1
 
 
 def test_reach_round_trip_between_processes(reach_server, ros_probe):

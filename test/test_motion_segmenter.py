@@ -184,8 +184,8 @@ def test_results_are_read_only():
         r.mask[0, 0] = 1
 
 
-def test_shipped_yaml_loads():
-    """config/motion_segmenter.yaml loads into MotionSegmenterConfig with motionCUT's grid,
+def test_shipped_values_are_motioncuts():
+    """config/motion_segmenter.yaml holds motionCUT's grid,
     neighbour, persistence and blob-size defaults, the 11 px window and 3 pyramid levels."""
     c = MotionSegmenterConfig.from_yaml(config_dir() / "motion_segmenter.yaml", "motion_segmenter")
     assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 11, 3)

@@ -169,9 +169,8 @@ def test_config_validation():
         SimConfig(box_position=(0.1, 0.2))
 
 
-def test_shipped_yaml_loads():
-    """config/sim_bridge.yaml loads into SimConfig (every key a SimConfig field, no unknown
-    key) with the contract's camera intrinsics."""
+def test_shipped_camera_intrinsics():
+    """config/sim_bridge.yaml holds the Gazebo iCub's eye-camera intrinsics and a 1 ms step."""
     from icub_pmp.config import config_dir, load_params_file
 
     cfg = SimConfig.from_dict(load_params_file(config_dir() / "sim_bridge.yaml", "sim_bridge"))

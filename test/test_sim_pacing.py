@@ -11,18 +11,10 @@ from icub_sim_bridge.lockstep_gate import LockstepGate
 from icub_sim_bridge.step_pacer import StepPacer
 
 
-class _Clock:
-    def __init__(self) -> None:
-        self.t = 100.0
-
-    def __call__(self) -> float:
-        return self.t
-
-
-def test_pacer_keeps_sim_time_at_the_real_time_factor():
+def test_pacer_keeps_sim_time_at_the_real_time_factor(fake_clock):
     """At factor 0.5, 10 ms of simulated time take 20 ms of wall time: after a step done
     instantly the pacer asks to wait the rest (minus the early wake-up)."""
-    clock = _Clock()
+    clock = fake_clock
     pacer = StepPacer(clock)
     assert pacer.wait_time(0.0, 0.5) == 0.0  # first call anchors
     assert pacer.wait_time(0.010, 0.5) == pytest.approx(0.020 - 0.001)
@@ -32,8 +24,8 @@ def test_pacer_keeps_sim_time_at_the_real_time_factor():
     assert pacer.wait_time(0.0175, 0.5) == 0.0
 
 
-def test_pacer_never_waits_as_fast_as_possible_and_reanchors_on_a_new_factor():
-    clock = _Clock()
+def test_pacer_never_waits_as_fast_as_possible_and_reanchors_on_a_new_factor(fake_clock):
+    clock = fake_clock
     pacer = StepPacer(clock)
     assert pacer.wait_time(5.0, 0.0) == 0.0
     pacer.wait_time(5.0, 1.0)
@@ -42,10 +34,10 @@ def test_pacer_never_waits_as_fast_as_possible_and_reanchors_on_a_new_factor():
     assert pacer.wait_time(5.1, 2.0) == pytest.approx(0.05 - 0.001)
 
 
-def test_pacer_does_not_catch_up_after_a_stall():
+def test_pacer_does_not_catch_up_after_a_stall(fake_clock):
     """Far behind (the machine stalled 1 s), the pacer re-anchors: the next steps are paced
     from there, not run unpaced until the lost second is made up."""
-    clock = _Clock()
+    clock = fake_clock
     pacer = StepPacer(clock)
     pacer.wait_time(0.0, 1.0)
     clock.t += 1.0
