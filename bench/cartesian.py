@@ -1,4 +1,4 @@
-"""Benchmark of the Cartesian solver (issue 6): eq 11 with CasADi + IPOPT vs DLS, pink and PMP,
+"""Benchmark of the Cartesian solver: eq 11 with CasADi + IPOPT vs DLS, pink and PMP,
 and the jerk of the minimum-jerk trajectories vs a VITE-style and a DLS-driven reach.
 
     scripts/env.sh python bench/cartesian.py --quick     # < 2 min

@@ -1,4 +1,4 @@
-"""Benchmark of the 1 kHz joint controller (issue 5): lockstep real-time factor, controller
+"""Benchmark of the 1 kHz joint controller: lockstep real-time factor, controller
 compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
 
     scripts/env.sh python bench/control.py --quick     # < 2 min

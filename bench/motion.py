@@ -1,4 +1,4 @@
-"""Benchmark of the motion segmenter (issue 7): motionCUT-style LK failures vs MOG2 and a
+"""Benchmark of the motion segmenter: motionCUT-style LK failures vs MOG2 and a
 dense-flow residual, on sequences rendered by the simulator's eye cameras.
 
     scripts/env.sh python bench/motion.py --quick     # < 2 min

@@ -1,4 +1,4 @@
-"""Benchmark of the PMP planner (issue 4) against a damped-least-squares baseline.
+"""Benchmark of the PMP planner against a damped-least-squares baseline.
 
     scripts/env.sh python bench/pmp.py --quick          # 200 targets, < 2 min
     scripts/env.sh python bench/pmp.py                  # 1000 targets
@@ -13,7 +13,7 @@ Plan time = wall time of ``PmpPlanner.plan`` (CPU time of the thread also report
 loaded machine it stays near the unloaded wall time) (relaxation, posture-memory fallback when used,
 TBG sampling of the trajectory, residuals); the posture memory is built once before timing
 (reported as memory_build_s) and the predicted hand paths (computed on demand, for the node's
-nav_msgs/Path) are timed separately. The same targets go to DLS (icub_pmp.pmp.DlsSolver, same
+nav_msgs/Path) are timed separately. The same targets go to DLS (icub_pmp.baselines.DlsSolver, same
 joints, limits and start). Ends with one JSON line. Timings depend on the machine's load.
 """
 

@@ -1,4 +1,4 @@
-"""Benchmark of the simulated iCub (issue 3): physics alone, the node, the node with cameras,
+"""Benchmark of the simulated iCub: physics alone, the node, the node with cameras,
 lockstep with a controller in another process.
 
     scripts/env.sh python bench/sim.py [--quick]

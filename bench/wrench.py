@@ -1,4 +1,4 @@
-"""Benchmark of the wrench estimator (issue 5): compute time per sample, FT prediction in
+"""Benchmark of the wrench estimator: compute time per sample, FT prediction in
 contact-free motion (the paper's Table 1), external-force error vs the simulator's ground
 truth, and the incremental RFRR (Sect. 3.1): update time per sample and nMSE for D = 200,
 500, 1000, with the nominal model and with a 10 % heavier left forearm in the estimator.

@@ -1,7 +1,7 @@
 """sim_bridge: the simulated iCub on ROS 2 (stands in for iCub_SIM / gazebo-yarp-plugins).
 
 A thin adapter over :class:`icub_sim_bridge.Simulator` (all physics there). Topics, services
-and frames follow ``INTERFACES.md``:
+and frames:
 
 publishes  /clock (every step), /joint_states (every step: position [rad], velocity [rad/s],
            effort = applied torque [N m], stamp = sim time), /ft/{l_arm_ft,r_arm_ft,l_leg_ft,

@@ -1,4 +1,4 @@
-"""The `icub` command line and scripts/run_node.sh over real DDS (issue 2)."""
+"""The `icub` command line and scripts/run_node.sh over real DDS."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""motion_segmenter node over DDS (issue 7): masks, blobs and the 3-D target; bad images.
+"""motion_segmenter node over DDS: masks, blobs and the 3-D target; bad images.
 
 The node runs as a subprocess (scripts/run_node.sh with config/motion_segmenter.yaml) in the
 session's private ROS domain; the test publishes real MuJoCo renders of the simulator's eye

@@ -1,4 +1,4 @@
-"""MotionSegmenter (issue 7): the eq. 13 LK-failure test, filters, blobs, bad input.
+"""MotionSegmenter: the eq. 13 LK-failure test, filters, blobs, bad input.
 
 Synthetic images (no simulator): a textured canvas seen through a rotating pinhole camera
 (homographies) with a textured patch moving on it.

@@ -1,4 +1,4 @@
-"""Evaluation data of the motion benchmark (issue 7): sequences rendered from the simulator's
+"""Evaluation data of the motion benchmark: sequences rendered from the simulator's
 eye cameras with MuJoCo ground truth, and the synthetic homography sequences."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Stereo triangulation of motion targets (issue 7): pixel pairs -> a point in root_link with
+"""Stereo triangulation of motion targets: pixel pairs -> a point in root_link with
 the cameras' intrinsics and the head/eye kinematics."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""TargetTracker (issue 7): the largest blob is the target, followed smoothly over time."""
+"""TargetTracker: the largest blob is the target, followed smoothly over time."""
 
 from __future__ import annotations
 

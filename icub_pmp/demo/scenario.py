@@ -1,4 +1,4 @@
-"""The demo scenario of the papers on the simulated iCub, driven over DDS (issue 8).
+"""The demo scenario of the papers on the simulated iCub, driven over DDS.
 
 Starts the node graph through its scripts (simulator in lockstep with the impedance
 controller, so the 1 kHz loop is exact in simulated time), records every topic to

@@ -1,6 +1,6 @@
 """motion_segmenter: independent-motion blobs from the eye cameras (motionCUT), a 3-D target.
 
-A thin adapter over :mod:`icub_pmp.vision` (issue 7; INTERFACES.md):
+A thin adapter over :mod:`icub_pmp.vision`:
 
 subscribes  /cam/left/image_raw, /cam/right/image_raw (sensor_msgs/Image rgb8/bgr8/mono8 of
             ``image_width`` x ``image_height``; others are dropped with a throttled warning),
