@@ -64,6 +64,31 @@ def ros_probe(ros_domain_id):
         probe.close()
 
 
+@pytest.fixture(scope="session")
+def model():
+    """The iCub model (pinocchio on the icub-models URDF), built once per session."""
+    from icub_pmp.kinematics import IcubModel
+
+    return IcubModel()
+
+
+@pytest.fixture(scope="session")
+def vm_ik_solver(model):
+    """The eq 11 solver on the CasADi VM (no C compilation: fast to build) with a wall-time
+    bound loose enough for a loaded machine (tests check answers, not speed)."""
+    from icub_pmp.cartesian import IkConfig, IkSolver
+
+    return IkSolver(model, IkConfig(codegen=False, max_solve_time=5.0))
+
+
+@pytest.fixture(scope="module")
+def sim():
+    """A simulator without cameras, shared by the tests of one module (they step it)."""
+    from icub_sim_bridge import SimConfig, Simulator
+
+    return Simulator(SimConfig(cameras_enabled=False))
+
+
 class FakeClock:
     """A settable clock for cores that take one (``clock()`` returns :attr:`t` [s])."""
 

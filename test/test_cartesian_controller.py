@@ -6,29 +6,22 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from icub_pmp.cartesian import CartesianController, IkConfig, IkSolver, MinJerkConfig
+from icub_pmp.cartesian import CartesianController, MinJerkConfig
 from icub_pmp.errors import InvalidInput
-from icub_pmp.kinematics import IcubModel
 
 CHAIN = "torso_right_arm"
 TARGET_A = np.array([-0.30, 0.15, 0.05])  # root_link [m]
 TARGET_B = np.array([-0.25, 0.20, 0.12])
 
 
-@pytest.fixture(scope="module")
-def solver() -> IkSolver:
-    # the CasADi VM (no C compilation) keeps the test fast
-    return IkSolver(IcubModel(), IkConfig(codegen=False, max_solve_time=5.0))
-
-
 @pytest.fixture
-def controller(solver) -> CartesianController:
-    return CartesianController(solver, MinJerkConfig(trajectory_time=1.0))
+def controller(vm_ik_solver) -> CartesianController:
+    return CartesianController(vm_ik_solver, MinJerkConfig(trajectory_time=1.0))
 
 
 @pytest.fixture(scope="module")
-def measured(solver) -> dict[str, float]:
-    return dict(solver.model.spec.posture("rest"))
+def measured(model) -> dict[str, float]:
+    return dict(model.spec.posture("rest"))
 
 
 def test_a_goal_is_solved_and_rolled_out_from_the_measured_joints(controller, measured):

@@ -17,7 +17,6 @@ from icub_pmp.cartesian import (
 )
 from icub_pmp.config import config_dir
 from icub_pmp.errors import ConfigError, InvalidInput, UnknownName
-from icub_pmp.kinematics import IcubModel
 from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
 
 CHAIN = "torso_right_arm"
@@ -29,11 +28,6 @@ def _cfg(**kw) -> IkConfig:
     kw.setdefault("codegen", False)
     kw.setdefault("max_solve_time", 5.0)
     return IkConfig(**kw)
-
-
-@pytest.fixture(scope="module")
-def model() -> IcubModel:
-    return IcubModel()
 
 
 @pytest.fixture(scope="module")

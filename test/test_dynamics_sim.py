@@ -5,7 +5,6 @@ external hand wrenches vs the simulator's ground truth, contact flags."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_sim_bridge.harness.sim_loop import SimLoop
@@ -14,15 +13,8 @@ from icub_sim_bridge.harness.sim_scenarios import (
     raised_posture,
     start_periodic_motion,
 )
-from icub_sim_bridge.sim_config import SimConfig
-from icub_sim_bridge.simulator import Simulator
 
 HANDS = ("left", "right")
-
-
-@pytest.fixture(scope="module")
-def sim() -> Simulator:
-    return Simulator(SimConfig(cameras_enabled=False))
 
 
 def _force_ok(est: np.ndarray, truth: np.ndarray) -> bool:

@@ -12,7 +12,6 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import Reach
-from icub_pmp.kinematics import IcubModel
 from icub_pmp.ros.conversions import duration_to_sec, make_joint_state
 from icub_pmp.testing import NodeProcess, repo_root
 
@@ -28,11 +27,6 @@ def node(ros_domain_id):
         yield proc
     finally:
         proc.stop()
-
-
-@pytest.fixture(scope="module")
-def model():
-    return IcubModel()
 
 
 def request(hands=("right",), right=(-0.30, 0.15, 0.05), left=(-0.30, -0.15, 0.05), **kw):
