@@ -137,6 +137,8 @@ class DlsSolver:
     def __init__(self, provider: JacobianProvider, config: DlsConfig | None = None):
         self.provider = provider
         self.config = config or DlsConfig()
+        self._chains: dict[str, KinematicChain] = {}
+        self._rest: np.ndarray | None = None
 
     def solve(
         self,
@@ -171,8 +173,9 @@ class DlsSolver:
         lo = prov.lower[idx] if lower is None else as_vector(lower, len(idx), "lower")
         hi = prov.upper[idx] if upper is None else as_vector(upper, len(idx), "upper")
         q[idx] = np.clip(q[idx], lo, hi)
-        rows = np.concatenate([[0, 1, 2] if R is None else [0, 1, 2, 3, 4, 5] for R in R_d])
-        frame_of_row = np.repeat(np.arange(k), [3 if R is None else 6 for R in R_d])
+        # rows of the stacked Jacobians (k * 6, nq) in the task: x, y, z (+ rotation) per frame
+        rows = np.concatenate([6 * i + np.arange(3 if R is None else 6) for i, R in enumerate(R_d)])
+        rotated = [i for i in range(k) if R_d[i] is not None]
         best, best_it = np.inf, 0
         status = _MAX_ITER
         it = 0
@@ -180,17 +183,19 @@ class DlsSolver:
         while True:
             kin = prov.kinematics(q, frames)
             e_pos = x_d - kin.positions
-            pos_err = np.linalg.norm(e_pos, axis=1)
+            pos_err = np.sqrt(np.einsum("ij,ij->i", e_pos, e_pos))
             ori_err = np.full(k, math.nan)
-            errors = []
-            for i in range(k):
-                errors.append(e_pos[i])
-                if R_d[i] is not None:
-                    e_rot = pin.log3(R_d[i] @ kin.rotations[i].T)
-                    ori_err[i] = float(np.linalg.norm(e_rot))
-                    errors.append(e_rot)
+            if rotated:
+                errors = np.zeros((k, 6))
+                errors[:, :3] = e_pos
+                for i in rotated:
+                    errors[i, 3:] = pin.log3(R_d[i] @ kin.rotations[i].T)
+                    ori_err[i] = math.sqrt(errors[i, 3:] @ errors[i, 3:])
+                error = errors.reshape(-1)[rows]
+            else:
+                error = e_pos.reshape(-1)
             worst = float(pos_err.max())
-            ori_ok = bool(np.all(np.nan_to_num(ori_err) <= cfg.orientation_tolerance))
+            ori_ok = not rotated or float(np.max(ori_err[rotated])) <= cfg.orientation_tolerance
             if worst <= cfg.position_tolerance and ori_ok:
                 status = _CONVERGED
                 break
@@ -202,13 +207,11 @@ class DlsSolver:
                 status = _STALLED
                 break
             it += 1
-            jac = kin.jacobians[frame_of_row, rows][:, idx]
-            dq = damped_least_squares_step(jac, np.concatenate(errors), cfg.damping,
-                                           cfg.max_step)
+            jac = kin.jacobians.reshape(6 * k, -1)[rows][:, idx]
+            dq = damped_least_squares_step(jac, error, cfg.damping, cfg.max_step)
             q[idx] = np.clip(q[idx] + dq, lo, hi)
         solve_time = time.perf_counter() - t0
         verdict = cfg.success_tolerance or cfg.position_tolerance
-        ori_ok = bool(np.all(np.nan_to_num(ori_err) <= cfg.orientation_tolerance))
         success = bool(worst <= verdict and ori_ok)
         return DlsResult(
             q=q,
@@ -235,9 +238,13 @@ class DlsSolver:
     ) -> DlsResult:
         """Solve for the hand of a Cartesian-solver chain (``right_arm``, ``torso_right_arm``,
         ...) from ``q_start`` (nq,) [rad] (default: the rest posture of config/robot.yaml)."""
-        kc = KinematicChain.from_name(chain)
+        kc = self._chains.get(chain)
+        if kc is None:
+            kc = self._chains[chain] = KinematicChain.from_name(chain)
         if q_start is None:
-            rest = RobotSpec.load().posture("rest")
-            q_start = np.array([rest.get(j, 0.0) for j in self.provider.joint_names])
+            if self._rest is None:
+                rest = RobotSpec.load().posture("rest")
+                self._rest = np.array([rest.get(j, 0.0) for j in self.provider.joint_names])
+            q_start = self._rest
         return self.solve(q_start, kc.joints, [kc.frame], position,
                           None if rotation is None else [rotation])

@@ -9,5 +9,6 @@ and the demo share, and nothing the numerical cores may import.
 - :mod:`.bag_recorder`, :mod:`.bag_player`: ``icub bag record`` / ``play`` on rclpy;
 - :mod:`.probe`: an in-process node for tests and the demo;
 - node configurations that are not algorithms (:mod:`.cartesian_node_config`,
-  :mod:`.robot_state_publisher_config`, :mod:`.pmp_node_config`).
+  :mod:`.pmp_node_config`, :mod:`.posture_publisher_config`,
+  :mod:`.robot_state_publisher_config`).
 """
