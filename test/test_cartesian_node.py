@@ -12,7 +12,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import GoToPose, SolvePose
 from icub_pmp.kinematics import IcubModel
-from icub_pmp.ros.conversions import duration_to_sec
+from icub_pmp.ros.conversions import duration_to_sec, make_joint_state
 from icub_pmp.testing import NodeProcess, repo_root
 
 TARGET = (-0.30, 0.15, 0.05)  # in front of the right shoulder, root_link [m]
@@ -112,8 +112,9 @@ def test_bad_requests_answer_false(graph, ros_probe):
 
 def test_go_to_pose_publishes_a_min_jerk_trajectory(graph, ros_probe):
     """go_to_pose publishes on /joint_trajectory the trajectory it returns: chain joints,
-    starting at the current joints (rest posture), ending at the solution; a second goal
-    during the motion continues from the running trajectory."""
+    starting at the request's start state (the rest posture: an explicit start never
+    continues a running trajectory), ending at the solution; a second goal during the motion
+    continues from the running trajectory."""
     solver, _ = graph
     _ready(ros_probe, solver)
     got: list[JointTrajectory] = []
@@ -121,14 +122,17 @@ def test_go_to_pose_publishes_a_min_jerk_trajectory(graph, ros_probe):
         JointTrajectory, "/joint_trajectory", got.append,
         QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
     ros_probe.wait_for(lambda: ros_probe.node.count_publishers("/joint_trajectory") > 0, 10.0)
-    r = ros_probe.call("/cartesian/go_to_pose", GoToPose, _request(GoToPose))
+    model = IcubModel()
+    rest = model.posture("rest")
+    req = _request(GoToPose)
+    req.start_state = make_joint_state(model.joint_names, position=rest)
+    r = ros_probe.call("/cartesian/go_to_pose", GoToPose, req)
     assert r.success, r.message
+    assert "continued" not in r.message
     assert ros_probe.wait_for(lambda: len(got) >= 1, 10.0)
     msg = got[0]
     assert list(msg.joint_names) == list(r.solution.name)
     assert len(msg.points) == len(r.trajectory.points) > 100
-    model = IcubModel()
-    rest = model.posture("rest")
     np.testing.assert_allclose(msg.points[0].positions, rest[model.indices(msg.joint_names)],
                                atol=1e-9)
     np.testing.assert_allclose(msg.points[-1].positions, r.solution.position, atol=2e-4)

@@ -17,7 +17,7 @@ import threading
 from typing import Callable, TypeVar
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 
@@ -66,6 +66,11 @@ def spin_node(
         pass
     except ConfigError as exc:
         raise SystemExit(f"{name}: {exc}") from exc
+    except Exception:
+        if rclpy.ok():
+            raise
+        # a callback racing the shutdown (publishing on a context a signal just shut down):
+        # the node is stopping anyway
     finally:
         stop.set()
         if thread is not None:
@@ -96,19 +101,24 @@ def _run_worker(worker: Worker, node: Node, stop: threading.Event,
 
 
 def run_node(factory: Callable[[], Node], args: list[str] | None = None,
-             name: str = "node") -> None:
+             name: str = "node", executor: Callable[[], Executor] | None = None) -> None:
     """``rclpy.init(args)``, build the node with ``factory()``, ``rclpy.spin`` until shutdown
     (Ctrl-C and external shutdowns end quietly), then destroy it and ``try_shutdown``. A
-    :class:`~icub_pmp.errors.ConfigError` while building exits with a one-line message."""
+    :class:`~icub_pmp.errors.ConfigError` while building exits with a one-line message.
+    ``executor``: a factory of the executor to spin with (default: rclpy's single-threaded
+    one), e.g. ``MultiThreadedExecutor`` for a node whose service waits on its topics."""
     rclpy.init(args=args)
     node = None
     try:
         node = factory()
-        rclpy.spin(node)
+        rclpy.spin(node, executor=executor() if executor is not None else None)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ConfigError as exc:
         raise SystemExit(f"{name}: {exc}") from exc
+    except Exception:
+        if rclpy.ok():
+            raise
     finally:
         if node is not None:
             node.destroy_node()
