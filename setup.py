@@ -6,18 +6,18 @@ from setuptools import find_packages, setup
 
 PACKAGE = "icub_pmp"
 
-# One entry per node executable (`ros2 run icub_pmp <name>`); module path = icub_pmp.nodes.<name>.
-NODES = [
-    "cartesian_solver",
-    "gaze_controller",
-    "impedance_controller",
-    "motion_segmenter",
-    "pmp_planner",
-    "posture_publisher",
-    "robot_state_publisher",
-    "sim_bridge",
-    "wrench_estimator",
-]
+# One entry per node executable (`ros2 run icub_pmp <name>`): name -> module with its main().
+NODES = {
+    "cartesian_solver": f"{PACKAGE}.nodes.cartesian_solver",
+    "gaze_controller": f"{PACKAGE}.nodes.gaze_controller",
+    "impedance_controller": f"{PACKAGE}.nodes.impedance_controller",
+    "motion_segmenter": f"{PACKAGE}.nodes.motion_segmenter",
+    "pmp_planner": f"{PACKAGE}.nodes.pmp_planner",
+    "posture_publisher": f"{PACKAGE}.nodes.posture_publisher",
+    "robot_state_publisher": f"{PACKAGE}.nodes.robot_state_publisher",
+    "sim_bridge": "icub_sim_bridge.sim_bridge_node",
+    "wrench_estimator": f"{PACKAGE}.nodes.wrench_estimator",
+}
 
 setup(
     name=PACKAGE,
@@ -36,7 +36,7 @@ setup(
     description="ROS 2 Jazzy iCub node graph: PMP planner, controllers, estimators, MuJoCo sim",
     license="BSD-3-Clause",
     entry_points={
-        "console_scripts": [f"{n} = {PACKAGE}.nodes.{n}:main" for n in NODES]
+        "console_scripts": [f"{n} = {module}:main" for n, module in NODES.items()]
         + ["icub = icub_pmp.cli.main:main"],
     },
 )

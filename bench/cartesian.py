@@ -1,4 +1,4 @@
-"""Benchmark of the Cartesian solver (issue 6): eq 11 with CasADi + IPOPT vs DLS, pink and PMP,
+"""Benchmark of the Cartesian solver: eq 11 with CasADi + IPOPT vs DLS, pink and PMP,
 and the jerk of the minimum-jerk trajectories vs a VITE-style and a DLS-driven reach.
 
     scripts/env.sh python bench/cartesian.py --quick     # < 2 min
@@ -43,17 +43,18 @@ import pinocchio as pin  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from icub_pmp.baselines import DlsSolver  # noqa: E402
 from icub_pmp.cartesian import (  # noqa: E402
     ArmLinearConstraints,
-    DlsSolver,
     IkConfig,
     IkSolver,
     KinematicChain,
     MinJerkConfig,
     MinJerkGenerator,
-    rotation_angle,
 )
 from icub_pmp.kinematics import IcubModel  # noqa: E402
+from icub_pmp.kinematics.rotations import rotation_angle  # noqa: E402
+from icub_pmp.pmp import PinocchioJacobianProvider  # noqa: E402
 
 CHAIN = "torso_right_arm"
 POS_OK = 1e-3  # [m]
@@ -306,7 +307,7 @@ def main(argv=None) -> int:
     ik_free = IkSolver(model, IkConfig(shoulder_constraints=False))
     ik_free.problem(CHAIN)
     build_s = time.perf_counter() - t0
-    dls = DlsSolver(model)
+    dls = DlsSolver(PinocchioJacobianProvider(model))
     pink_solver = PinkSolver(model)
 
     iterations: dict[str, list[int]] = {"pos": [], "pose": []}
@@ -326,7 +327,7 @@ def main(argv=None) -> int:
         return solve
 
     def dls_fn(T, ori):
-        return dls.solve(CHAIN, T.translation, T.rotation if ori else None).q
+        return dls.solve_chain(CHAIN, T.translation, T.rotation if ori else None).joint_positions
 
     def pink_fn(T, ori):
         return pink_solver.solve(T, ori)[0]

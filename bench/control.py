@@ -1,4 +1,4 @@
-"""Benchmark of the 1 kHz joint controller (issue 5): lockstep real-time factor, controller
+"""Benchmark of the 1 kHz joint controller: lockstep real-time factor, controller
 compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
 
     scripts/env.sh python bench/control.py --quick     # < 2 min
@@ -42,8 +42,8 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
-from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
-from icub_pmp.control.sim_scenarios import track_min_jerk  # noqa: E402
+from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
+from icub_sim_bridge.harness.sim_scenarios import track_min_jerk  # noqa: E402
 from icub_sim_bridge.sim_config import SimConfig  # noqa: E402
 from icub_sim_bridge.simulator import Simulator  # noqa: E402
 

@@ -19,7 +19,7 @@ tracks a moving object.
    points (goal <= 2 px). ``settle_ms_median``: from the command until the projection stays
    within 2 px in both cameras (median over the points that settle). ``plan_ms_median``: the
    core's solve + trajectory rollout (wall time, load-dependent).
-2. Tracking. The motion segmenter's sequences (icub_pmp.vision.sequence_generator: the
+2. Tracking. The motion segmenter's sequences (icub_sim_bridge.harness.sequence_generator: the
    simulator's scene with textures and an 8 cm textured ball) are rendered from the robot's
    posture in the same physics loop while the gaze controller tracks the ball: the ball moves
    back and forth across the table (+-10 cm in y at 10 and 20 cm/s), and each camera frame
@@ -55,13 +55,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from motion import _roi  # noqa: E402  (bench/motion.py: the grid region it scores F1 in)
 
+from icub_pmp.baselines.synthetic_sequence import triangle_wave  # noqa: E402
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
-from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
 from icub_pmp.gaze import GazeController, GazePlan  # noqa: E402
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, project_point  # noqa: E402
 from icub_pmp.vision import MotionSegmenter, MotionSegmenterConfig, SegmentationCounts  # noqa: E402
-from icub_pmp.vision.sequence_generator import SequenceGenerator  # noqa: E402
-from icub_pmp.vision.synthetic_sequence import triangle_wave  # noqa: E402
+from icub_sim_bridge.harness.sequence_generator import SequenceGenerator  # noqa: E402
+from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
 
 SEED = 2026
 GOAL_PX = 2.0

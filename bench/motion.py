@@ -1,10 +1,10 @@
-"""Benchmark of the motion segmenter (issue 7): motionCUT-style LK failures vs MOG2 and a
+"""Benchmark of the motion segmenter: motionCUT-style LK failures vs MOG2 and a
 dense-flow residual, on sequences rendered by the simulator's eye cameras.
 
     scripts/env.sh python bench/motion.py --quick     # < 2 min
     scripts/env.sh python bench/motion.py             # longer sequences, more static frames
 
-Data (icub_pmp.vision.sequence_generator, generated on demand, nothing stored): the
+Data (icub_sim_bridge.harness.sequence_generator, generated on demand, nothing stored): the
 simulator's MuJoCo iCub (left eye camera, 320x240, fx = fy = 343.12, 30 Hz) looking down at
 the table, with textures added to the room and an 8 cm textured ball that moves at 10, 40 and
 100 cm/s back and forth (+-8 cm), parallel or orthogonal to the image plane, about 0.47 m from
@@ -47,14 +47,9 @@ import yaml  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from icub_pmp.vision import (  # noqa: E402
-    FlowResidualDetector,
-    Mog2Detector,
-    MotionSegmenter,
-    MotionSegmenterConfig,
-    SegmentationCounts,
-)
-from icub_pmp.vision.sequence_generator import SequenceGenerator, SequenceSpec  # noqa: E402
+from icub_pmp.baselines import FlowResidualDetector, Mog2Detector, SegmentationCounts
+from icub_pmp.vision import MotionSegmenter, MotionSegmenterConfig
+from icub_sim_bridge.harness.sequence_generator import SequenceGenerator, SequenceSpec  # noqa: E402
 
 METHODS = ("motioncut", "mog2", "flow_residual")
 SPEEDS = (0.1, 0.4, 1.0)

@@ -46,7 +46,6 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
 from icub_pmp.errors import ModelError  # noqa: E402
 from icub_pmp.kinematics.robot_spec import HANDS  # noqa: E402
 from icub_pmp.peripersonal import (  # noqa: E402
@@ -58,6 +57,7 @@ from icub_pmp.peripersonal import (  # noqa: E402
 )
 from icub_pmp.peripersonal.peripersonal_space import map_file  # noqa: E402
 from icub_sim_bridge import SimConfig  # noqa: E402
+from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "out"
 PAPER_NEURONS = {"left": 478, "right": 476}  # TX and RX robots' maps (Bhat and Mohan 2018)

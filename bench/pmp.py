@@ -1,4 +1,4 @@
-"""Benchmark of the PMP planner (issue 4) against a damped-least-squares baseline.
+"""Benchmark of the PMP planner against a damped-least-squares baseline.
 
     scripts/env.sh python bench/pmp.py --quick          # 200 targets, < 2 min
     scripts/env.sh python bench/pmp.py                  # 1000 targets
@@ -13,7 +13,7 @@ Plan time = wall time of ``PmpPlanner.plan`` (CPU time of the thread also report
 loaded machine it stays near the unloaded wall time) (relaxation, posture-memory fallback when used,
 TBG sampling of the trajectory, residuals); the posture memory is built once before timing
 (reported as memory_build_s) and the predicted hand paths (computed on demand, for the node's
-nav_msgs/Path) are timed separately. The same targets go to DLS (icub_pmp.pmp.DlsSolver, same
+nav_msgs/Path) are timed separately. The same targets go to DLS (icub_pmp.baselines.DlsSolver, same
 joints, limits and start). Ends with one JSON line. Timings depend on the machine's load.
 """
 
@@ -32,8 +32,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from icub_pmp.baselines import PMP_DLS_CONFIG, DlsSolver  # noqa: E402
 from icub_pmp.pmp import (  # noqa: E402
-    DlsSolver,
     PmpPlanner,
     ReachGoal,
     TimeBaseGenerator,
@@ -90,16 +90,17 @@ def run_pmp(planner: PmpPlanner, targets: np.ndarray) -> dict:
 def run_dls(planner: PmpPlanner, targets: np.ndarray) -> dict:
     spec = planner.spec
     joints = spec.torso_joints + spec.left_arm_joints + spec.right_arm_joints
-    dls = DlsSolver(planner.provider, joints, [spec.hand_frame("left"), spec.hand_frame("right")])
+    dls = DlsSolver(planner.provider, PMP_DLS_CONFIG)
+    hands = [spec.hand_frame("left"), spec.hand_frame("right")]
     rest = planner.start_configuration(None)
     times, cpu, residuals, iters = [], [], [], []
     for x in targets:
         c0 = time.thread_time()
         t0 = time.perf_counter()
-        sol = dls.solve(rest, x)
+        sol = dls.solve(rest, joints, hands, x)
         times.append(time.perf_counter() - t0)
         cpu.append(time.thread_time() - c0)
-        residuals.append(float(sol.residuals.max()))
+        residuals.append(sol.position_error)
         iters.append(sol.iterations)
     return {"times": np.array(times) * 1e3, "cpu": np.array(cpu) * 1e3,
             "residuals": np.array(residuals),

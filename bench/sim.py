@@ -1,4 +1,4 @@
-"""Benchmark of the simulated iCub (issue 3): physics alone, the node, the node with cameras,
+"""Benchmark of the simulated iCub: physics alone, the node, the node with cameras,
 lockstep with a controller in another process.
 
     scripts/env.sh python bench/sim.py [--quick]
@@ -78,7 +78,7 @@ def _clock_rtf(probe, seconds: float, warmup: float, pid: int) -> tuple[float, f
     """(wall RTF, sim s per node CPU s) from /clock stamps over ``seconds`` (medians)."""
     from rosgraph_msgs.msg import Clock
 
-    from icub_pmp.nodes.conversions import time_to_sec
+    from icub_pmp.ros.conversions import time_to_sec
 
     last = {"t": None}
 

@@ -1,4 +1,4 @@
-"""Benchmark of the wrench estimator (issue 5): compute time per sample, FT prediction in
+"""Benchmark of the wrench estimator: compute time per sample, FT prediction in
 contact-free motion (the paper's Table 1), external-force error vs the simulator's ground
 truth, and the incremental RFRR (Sect. 3.1): update time per sample and nMSE for D = 200,
 500, 1000, with the nominal model and with a 10 % heavier left forearm in the estimator.
@@ -42,15 +42,15 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
-from icub_pmp.control.sim_loop import SimLoop  # noqa: E402
-from icub_pmp.control.sim_scenarios import (  # noqa: E402
+from icub_pmp.dynamics.ft_dynamics_model import FtDynamicsModel  # noqa: E402
+from icub_pmp.dynamics.random_features_ridge import RandomFeaturesRidge  # noqa: E402
+from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig  # noqa: E402
+from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
+from icub_sim_bridge.harness.sim_scenarios import (  # noqa: E402
     press_left_hand_on_table,
     raised_posture,
     start_periodic_motion,
 )
-from icub_pmp.dynamics.ft_dynamics_model import FtDynamicsModel  # noqa: E402
-from icub_pmp.dynamics.random_features_ridge import RandomFeaturesRidge  # noqa: E402
-from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig  # noqa: E402
 from icub_sim_bridge.sim_config import SimConfig  # noqa: E402
 from icub_sim_bridge.simulator import Simulator  # noqa: E402
 

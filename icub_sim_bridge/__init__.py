@@ -1,6 +1,9 @@
 """The simulated iCub: MuJoCo model built in code from the icub-models URDF, and its simulator.
 
-No ROS here: ``icub_pmp.nodes.sim_bridge`` is the thin rclpy node on top.
+No ROS in the package's core modules: :mod:`icub_sim_bridge.sim_bridge_node` is the thin rclpy
+node on top (executable ``sim_bridge``), :mod:`icub_sim_bridge.harness` the in-process loops and
+rendered sequences of the tests and benchmarks. The simulator uses the robot description of
+:mod:`icub_pmp.kinematics`; nothing in ``icub_pmp``'s cores imports this package.
 
 - :class:`ModelBuilder` -> :class:`BuiltModel` (the ``MjModel`` and its facts)
 - :class:`Simulator`: step, effort commands, joint state, FT, IMU, ground-truth wrenches,

@@ -22,7 +22,7 @@ What the model is
   between a pure motor (gain 1, no bias) and a "hold" (affine PD: gain kp, bias -kp q -kd qdot)
   at run time; MuJoCo clamps the resulting force to ``forcerange`` either way.
 - Joint physics for a stable 1 ms step (implicit-fast integrator): damping from the URDF
-  ``<dynamics damping="1.0">`` (the Gazebo models' value, ICUB_FACTS.md section 2), friction
+  ``<dynamics damping="1.0">`` (the value of the icub-models Gazebo models), friction
   from the URDF (0) unless ``joint_frictionloss``; armature (reflected rotor inertia) is NOT
   in any public model: chosen as J_rotor * N^2 with N = 100 (Harmonic Drive 100:1) and
   J_rotor of a few 1e-6 kg m^2 (small frameless motors): 0.05 / 0.03 / 0.01 kg m^2 for the

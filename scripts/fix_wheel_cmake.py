@@ -3,7 +3,7 @@
 
 The ros-jazzy-* wheels were built under /opt/python/cp311-cp311; their exported CMake files
 name that interpreter's include dir and numpy's include dir. CMake's generate step fails on the
-missing paths until they point at this interpreter (see shared/ENVIRONMENT.md).
+missing paths until they point at this interpreter.
 """
 
 from __future__ import annotations

@@ -267,7 +267,7 @@ def test_bag_core_imports_no_ros():
     """icub_pmp.bags (and the link-transform core) load without rclpy or message modules."""
     code = ("import sys, icub_pmp.bags, icub_pmp.bags.bag_reader, icub_pmp.bags.bag_writer, "
             "icub_pmp.bags.message_definitions, icub_pmp.kinematics.link_transforms, "
-            "icub_pmp.kinematics.robot_state_publisher_config\n"
+            "icub_pmp.ros.robot_state_publisher_config\n"
             "print(sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy' "
             "or m.split('.')[0].endswith(('_msgs', '_srvs', '_interfaces'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

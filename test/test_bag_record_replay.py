@@ -53,6 +53,24 @@ def _record(bag: Path, *extra: str) -> NodeProcess:
     return rec
 
 
+def _count(bag: Path) -> int:
+    """Messages readable so far from a bag being written (0 while it cannot be read)."""
+    try:
+        return sum(1 for _ in BagReader(bag).messages())
+    except Exception:  # a chunk half-written at this instant: not readable yet
+        return 0
+
+
+def _wait(predicate, timeout: float) -> bool:
+    """Poll ``predicate`` every 50 ms until true or ``timeout`` s pass."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.05)
+    return True
+
+
 def _decoded(bag: Path) -> dict[str, list]:
     out: dict[str, list] = {}
     for m in BagReader(bag).messages():
@@ -196,7 +214,9 @@ def test_replay_reproduces_the_stream(recorded, tmp_path):
     play = NodeProcess(command=[str(SCRIPTS / "replay.sh"), str(bag),
                                 "--wait-for-subscribers", "30", "--json"])
     assert play.proc.wait(120) == 0, play.output()
-    time.sleep(0.5)  # the recorder drains what is in flight
+    total = sum(len(v) for v in _decoded(bag).values())
+    # stop once the recorder has flushed every message (it flushes every 0.5 s)
+    assert _wait(lambda: _count(again) >= total, 30.0), (_count(again), total)
     assert rec.stop(30) == 0, rec.output()
     original, replayed = _decoded(bag), _decoded(again)
     assert set(replayed) == set(original)
@@ -248,7 +268,7 @@ def test_sigkill_leaves_a_readable_bag(ros_domain_id, tmp_path):
     rec = _record(bag, "/joint_states", "/ft/l_arm_ft")
     traffic = _traffic("--duration", "3", "--no-cameras", "--no-reach", "--subscribers", "5")
     assert traffic.wait_for_output('"ready"', 60)
-    time.sleep(2.0)  # > flush interval (0.5 s): some chunks are on disk
+    assert _wait(lambda: _count(bag) >= 500, 30.0)  # some chunks are flushed to disk
     rec.signal(signal.SIGKILL)
     rec.proc.wait(10)
     traffic.proc.wait(60)

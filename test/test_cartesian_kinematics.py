@@ -9,12 +9,6 @@ import pytest
 
 from icub_pmp.cartesian import CHAIN_NAMES, ArmLinearConstraints, CasadiKinematics, KinematicChain
 from icub_pmp.errors import InvalidInput, ModelError, UnknownName
-from icub_pmp.kinematics import IcubModel
-
-
-@pytest.fixture(scope="module")
-def model() -> IcubModel:
-    return IcubModel()
 
 
 @pytest.mark.parametrize("name", CHAIN_NAMES)

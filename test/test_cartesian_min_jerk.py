@@ -7,30 +7,14 @@ import numpy as np
 import pytest
 
 from icub_pmp.cartesian import (
-    IkConfig,
-    IkSolver,
     KinematicChain,
     MinJerkConfig,
     MinJerkFilter,
     MinJerkGenerator,
 )
 from icub_pmp.errors import InvalidInput
-from icub_pmp.kinematics import IcubModel
 
 CHAIN = "torso_right_arm"
-
-
-def _cfg(**kw) -> IkConfig:
-    """Test configuration: CasADi VM (no compile, fast start) and a wall-time bound loose
-    enough for a heavily loaded machine (these tests check answers, not speed)."""
-    kw.setdefault("codegen", False)
-    kw.setdefault("max_solve_time", 5.0)
-    return IkConfig(**kw)
-
-
-@pytest.fixture(scope="module")
-def model() -> IcubModel:
-    return IcubModel()
 
 
 @pytest.fixture(scope="module")
@@ -77,8 +61,8 @@ def test_filter_rejects_bad_times():
         MinJerkFilter(3, 2.0, 0.0)
 
 
-def _goal(model, chain, seed=0):
-    solver = IkSolver(model, _cfg())
+def _goal(solver, chain, seed=0):
+    model = solver.model
     q0 = model.posture("rest")
     target = model.frame_position(q0, chain.frame) + np.array([0.08, -0.05, 0.10])
     sol = solver.solve(chain.name, target, None, q0)
@@ -86,10 +70,10 @@ def _goal(model, chain, seed=0):
     return q0, sol
 
 
-def test_generator_reaches_the_solution(model, chain):
+def test_generator_reaches_the_solution(model, chain, vm_ik_solver):
     """The rollout starts at q0 at rest, ends at q_d (within the settle tolerance) at rest,
     and the hand ends at K(q_d); 90 % of the hand distance is covered near T."""
-    q0, sol = _goal(model, chain)
+    q0, sol = _goal(vm_ik_solver, chain)
     gen = MinJerkGenerator(model, chain)
     gen.reset(q0)
     gen.set_target(sol.q)
@@ -106,11 +90,11 @@ def test_generator_reaches_the_solution(model, chain):
     assert np.all(tr.q >= model.lower[idx] - 1e-12) and np.all(tr.q <= model.upper[idx] + 1e-12)
 
 
-def test_generator_is_smooth(model, chain):
+def test_generator_is_smooth(model, chain, vm_ik_solver):
     """Velocities change by small amounts per sample (no jumps): the largest change of any
     joint velocity between samples is below 3 % of that joint's peak velocity (the LTI
     min-jerk profile needs about 2.4 % at a 10 ms period with T = 2 s)."""
-    q0, sol = _goal(model, chain)
+    q0, sol = _goal(vm_ik_solver, chain)
     gen = MinJerkGenerator(model, chain)
     gen.reset(q0)
     gen.set_target(sol.q)
@@ -121,11 +105,11 @@ def test_generator_is_smooth(model, chain):
     assert np.all(jump[moving] < 0.03 * peak[moving])
 
 
-def test_retarget_mid_motion_is_smooth(model, chain):
+def test_retarget_mid_motion_is_smooth(model, chain, vm_ik_solver):
     """A new target at t = 0.8 s continues from the running state: velocity continuous at the
     switch (change no larger than elsewhere), and the motion ends at the new target."""
-    q0, sol = _goal(model, chain)
-    solver = IkSolver(model, _cfg())
+    q0, sol = _goal(vm_ik_solver, chain)
+    solver = vm_ik_solver
     gen = MinJerkGenerator(model, chain)
     gen.reset(q0)
     gen.set_target(sol.q)
@@ -151,10 +135,10 @@ def test_retarget_mid_motion_is_smooth(model, chain):
     assert np.linalg.norm(second.hand_position[-1] - new_target) < 1e-3
 
 
-def test_task_coupling_straightens_the_hand_path(model, chain):
+def test_task_coupling_straightens_the_hand_path(model, chain, vm_ik_solver):
     """With a strong task-space coupling (gamma large) the hand path is straighter than with
     the joint-space generator alone (the multi-referential scheme of Fig 8)."""
-    q0, sol = _goal(model, chain)
+    q0, sol = _goal(vm_ik_solver, chain)
 
     def deviation(cfg: MinJerkConfig) -> float:
         gen = MinJerkGenerator(model, chain, cfg)

@@ -12,7 +12,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import GoToPose, SolvePose
 from icub_pmp.kinematics import IcubModel
-from icub_pmp.nodes.conversions import duration_to_sec
+from icub_pmp.ros.conversions import duration_to_sec, make_joint_state
 from icub_pmp.testing import NodeProcess, repo_root
 
 TARGET = (-0.30, 0.15, 0.05)  # in front of the right shoulder, root_link [m]
@@ -49,7 +49,8 @@ def _ready(probe, solver) -> None:
 
 def test_solve_pose_over_dds(graph, ros_probe):
     """solve_pose answers joints, residual (< 0.51 mm) and solve time; the joints put the
-    right hand on the target (checked with pinocchio); nothing is published."""
+    right hand on the target (checked with pinocchio); nothing is published (the next trajectory
+on /joint_trajectory is the one of a later go_to_pose)."""
     solver, _ = graph
     _ready(ros_probe, solver)
     got: list[JointTrajectory] = []
@@ -67,8 +68,13 @@ def test_solve_pose_over_dds(graph, ros_probe):
                           default=model.posture("rest"))
     assert np.linalg.norm(model.frame_position(q, "r_hand_dh_frame") - TARGET) < 5.1e-4
     assert list(resp.solution.name)[:3] == ["torso_pitch", "torso_roll", "torso_yaw"]
-    ros_probe.wait_for(lambda: False, 0.5)
-    assert got == []
+    # a go_to_pose after it publishes a trajectory: the first one to arrive must be that one
+    # (one reliable publisher keeps its order), so solve_pose published nothing
+    moved = ros_probe.call("/cartesian/go_to_pose", GoToPose, _request(GoToPose))
+    assert moved.success, moved.message
+    assert ros_probe.wait_for(lambda: len(got) >= 1, 10.0)
+    assert got[0].header.stamp == moved.trajectory.header.stamp
+    assert len(got) == 1
     ros_probe.destroy(sub)
 
 
@@ -106,8 +112,9 @@ def test_bad_requests_answer_false(graph, ros_probe):
 
 def test_go_to_pose_publishes_a_min_jerk_trajectory(graph, ros_probe):
     """go_to_pose publishes on /joint_trajectory the trajectory it returns: chain joints,
-    starting at the current joints (rest posture), ending at the solution; a second goal
-    during the motion continues from the running trajectory."""
+    starting at the request's start state (the rest posture: an explicit start never
+    continues a running trajectory), ending at the solution; a second goal during the motion
+    continues from the running trajectory."""
     solver, _ = graph
     _ready(ros_probe, solver)
     got: list[JointTrajectory] = []
@@ -115,14 +122,17 @@ def test_go_to_pose_publishes_a_min_jerk_trajectory(graph, ros_probe):
         JointTrajectory, "/joint_trajectory", got.append,
         QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
     ros_probe.wait_for(lambda: ros_probe.node.count_publishers("/joint_trajectory") > 0, 10.0)
-    r = ros_probe.call("/cartesian/go_to_pose", GoToPose, _request(GoToPose))
+    model = IcubModel()
+    rest = model.posture("rest")
+    req = _request(GoToPose)
+    req.start_state = make_joint_state(model.joint_names, position=rest)
+    r = ros_probe.call("/cartesian/go_to_pose", GoToPose, req)
     assert r.success, r.message
+    assert "continued" not in r.message
     assert ros_probe.wait_for(lambda: len(got) >= 1, 10.0)
     msg = got[0]
     assert list(msg.joint_names) == list(r.solution.name)
     assert len(msg.points) == len(r.trajectory.points) > 100
-    model = IcubModel()
-    rest = model.posture("rest")
     np.testing.assert_allclose(msg.points[0].positions, rest[model.indices(msg.joint_names)],
                                atol=1e-9)
     np.testing.assert_allclose(msg.points[-1].positions, r.solution.position, atol=2e-4)

@@ -1,5 +1,4 @@
-"""The eq 11 Cartesian solver (IkSolver, CasADi + IPOPT, its warm-start seed) and the DLS
-baseline."""
+"""The eq 11 Cartesian solver (IkSolver, CasADi + IPOPT, its warm-start seed)."""
 
 from __future__ import annotations
 
@@ -11,8 +10,6 @@ import pytest
 
 from icub_pmp.cartesian import (
     ArmLinearConstraints,
-    CartesianNodeConfig,
-    DlsSolver,
     IkConfig,
     IkSolver,
     KinematicChain,
@@ -20,7 +17,7 @@ from icub_pmp.cartesian import (
 )
 from icub_pmp.config import config_dir
 from icub_pmp.errors import ConfigError, InvalidInput, UnknownName
-from icub_pmp.kinematics import IcubModel
+from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
 
 CHAIN = "torso_right_arm"
 
@@ -31,11 +28,6 @@ def _cfg(**kw) -> IkConfig:
     kw.setdefault("codegen", False)
     kw.setdefault("max_solve_time", 5.0)
     return IkConfig(**kw)
-
-
-@pytest.fixture(scope="module")
-def model() -> IcubModel:
-    return IcubModel()
 
 
 @pytest.fixture(scope="module")
@@ -248,33 +240,10 @@ def test_reconfigure_keeps_problems_unless_needed(model):
     assert s.problem("right_arm") is not p
 
 
-def test_dls_baseline(model):
-    """DLS reaches a reachable pose within its tolerances and fails (flagged) when the
-    target is out of reach."""
-    dls = DlsSolver(model)
-    T = _targets(model, 1, seed=9)[0]
-    sol = dls.solve(CHAIN, T.translation, T.rotation)
-    assert sol.success
-    assert sol.position_error <= dls.config.position_tolerance
-    assert sol.orientation_error <= dls.config.orientation_tolerance
-    far = dls.solve(CHAIN, [-2.0, 0.0, 0.0])
-    assert not far.success and far.position_error > 1.0
-
-
-def test_shipped_yaml_loads():
-    """config/cartesian_solver.yaml loads into IkConfig, MinJerkConfig and CartesianNodeConfig,
-    and holds no parameter none of them knows."""
-    from icub_pmp.config import load_params_file
-
-    path = config_dir() / "cartesian_solver.yaml"
-    params = load_params_file(path, "cartesian_solver")
-    known = set()
-    for cls in (IkConfig, MinJerkConfig, CartesianNodeConfig):
-        cfg = cls.from_yaml(path, "cartesian_solver")
-        known |= set(cls.field_names())
-        assert cfg == cls.from_dict({k: v for k, v in params.items() if k in cls.field_names()})
-    assert set(params) - {"use_sim_time"} <= known, sorted(set(params) - known)
-    assert IkConfig.from_yaml(path, "cartesian_solver") == IkConfig()  # yaml == defaults
+def test_shipped_solver_settings_are_the_defaults():
+    """config/cartesian_solver.yaml ships IkConfig's defaults (the iKinCartesianSolver values)."""
+    assert IkConfig.from_yaml(config_dir() / "cartesian_solver.yaml", "cartesian_solver") \
+        == IkConfig()
 
 
 @pytest.mark.parametrize(
@@ -330,7 +299,7 @@ def test_lifted_form_solves_eq11_itself(model, solver):
     own Lagrangian vanishes (to IPOPT's tolerance), the bound multiplier being >= 0."""
 
 
-    from icub_pmp.cartesian.ik_problem import POSITION_SCALE
+    from icub_pmp.cartesian.nlp_scaling import POSITION_SCALE
 
     prob = solver.problem(CHAIN)
     n, m = prob.chain.n, prob.n_linear
@@ -431,7 +400,7 @@ def test_seed_point_is_a_local_minimum_of_eq11(model, solver):
     p = prob.parameters(T.translation, None, 1.0, seeded.rest_weights(prob.chain), q_rest,
                         np.zeros(0))
     eps = seeded.config.epsilon
-    x0, lam_x, lam_g, perr, minimum = prob.seed(q_rest, p, eps)
+    x0, lam_x, lam_g, perr, minimum = seeded.seed(CHAIN)(q_rest, p, eps)
     n = prob.chain.n
     assert perr <= 1e-3 and minimum
     assert np.all(x0[:n] >= prob.lbx) and np.all(x0[:n] <= prob.ubx)
@@ -474,15 +443,15 @@ def test_seed_starts_from_the_given_joints(model, solver, plain):
 def test_compiled_seed_matches_the_casadi_vm(model, solver):
     seeded = solver
     """The gcc-compiled seed gives the same point and multipliers as CasADi's VM."""
-    compiled = IkSolver(model, _cfg(codegen=True)).problem(CHAIN)
-    assert compiled.seed.compiled
+    compiled = IkSolver(model, _cfg(codegen=True)).seed(CHAIN)
+    assert compiled.compiled
     prob = seeded.problem(CHAIN)
     T = _targets(model, 1, seed=34)[0]
     q_rest = model.posture("rest")[model.indices(prob.chain.joints)]
     p = prob.parameters(T.translation, T.rotation, 1.0, seeded.rest_weights(prob.chain), q_rest,
                         np.zeros(0))
-    a = compiled.seed(q_rest, p, 2.5e-7)
-    b = prob.seed(q_rest, p, 2.5e-7)
+    a = compiled(q_rest, p, 2.5e-7)
+    b = seeded.seed(CHAIN)(q_rest, p, 2.5e-7)
     for u, v in zip(a[:3], b[:3]):
         np.testing.assert_allclose(u, v, atol=1e-8)
     assert a[3] == pytest.approx(b[3], abs=1e-9) and a[4] == b[4]

@@ -8,7 +8,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from icub_pmp.config import config_dir
 from icub_pmp.control.impedance_controller import ImpedanceController
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.control.torque_pid import TorquePid
@@ -37,13 +36,6 @@ def _gravity(c: ImpedanceController, q: np.ndarray) -> np.ndarray:
         if name in c.model.joint_names:
             out[j] = g[c.model.indices([name])[0]]
     return out
-
-
-def test_shipped_yaml_loads():
-    """config/impedance_controller.yaml loads into ImpedanceControllerConfig."""
-    cfg = ImpedanceControllerConfig.from_yaml(config_dir() / "impedance_controller.yaml",
-                                              "impedance_controller")
-    assert cfg.mode in ("position", "impedance", "torque")
 
 
 def test_first_step_holds_the_measured_posture_with_gravity_compensation(base):

@@ -20,7 +20,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from icub_interfaces.srv import ApplyWrench
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_pmp.nodes.conversions import arrays_to_trajectory, sec_to_duration
+from icub_pmp.ros.conversions import arrays_to_trajectory, sec_to_duration
 from icub_pmp.testing import (
     NodeGraph,
     NodeProcess,

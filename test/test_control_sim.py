@@ -8,15 +8,9 @@ import numpy as np
 import pytest
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
-from icub_pmp.control.sim_loop import SimLoop
-from icub_pmp.control.sim_scenarios import track_min_jerk
-from icub_sim_bridge.sim_config import SimConfig
+from icub_sim_bridge.harness.sim_loop import SimLoop
+from icub_sim_bridge.harness.sim_scenarios import track_min_jerk
 from icub_sim_bridge.simulator import Simulator
-
-
-@pytest.fixture(scope="module")
-def sim() -> Simulator:
-    return Simulator(SimConfig(cameras_enabled=False))
 
 
 def _loop(sim: Simulator, **kw) -> SimLoop:

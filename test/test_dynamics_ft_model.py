@@ -8,7 +8,6 @@ import pytest
 
 from icub_pmp.dynamics.ft_dynamics_model import FtDynamicsModel
 from icub_pmp.errors import InvalidInput, UnknownName
-from icub_pmp.kinematics.robot_model import IcubModel
 
 DISTAL = {
     "left": ["l_upper_arm", "l_elbow_1", "l_forearm", "l_wrist_1", "l_hand"],
@@ -21,27 +20,22 @@ def ft_model() -> FtDynamicsModel:
     return FtDynamicsModel()
 
 
-@pytest.fixture(scope="module")
-def icub() -> IcubModel:
-    return IcubModel()
-
-
-def test_joint_torques_equal_icub_model(ft_model, icub):
+def test_joint_torques_equal_icub_model(ft_model, model):
     """Adding the motionless FT joints changes no joint torque: RNEA equals IcubModel's."""
     rng = np.random.default_rng(0)
-    assert ft_model.joint_names == icub.joint_names
+    assert ft_model.joint_names == model.joint_names
     for _ in range(5):
-        q = icub.random_q(rng)
-        v = rng.normal(size=icub.nq)
-        a = rng.normal(size=icub.nq)
+        q = model.random_q(rng)
+        v = rng.normal(size=model.nq)
+        a = rng.normal(size=model.nq)
         r = ft_model.rnea(q, v, a)
-        np.testing.assert_allclose(r.tau, icub.inverse_dynamics(q, v, a), atol=1e-9)
+        np.testing.assert_allclose(r.tau, model.inverse_dynamics(q, v, a), atol=1e-9)
 
 
-def test_static_sensor_force_is_the_distal_weight(ft_model, icub):
+def test_static_sensor_force_is_the_distal_weight(ft_model, model):
     """At rest the sensor force (parent on child) holds up the distal arm: |f| = m g, pointing
     up in root_link, with m the mass of upper arm + forearm + hand links."""
-    q = icub.posture("rest")
+    q = model.posture("rest")
     r = ft_model.rnea(q)
     for hand in ("left", "right"):
         m = sum(ft_model.link_mass(k) for k in DISTAL[hand])
@@ -51,11 +45,11 @@ def test_static_sensor_force_is_the_distal_weight(ft_model, icub):
         np.testing.assert_allclose(rot @ f_sensor, [0, 0, m * 9.81], atol=1e-9)
 
 
-def test_hand_wrench_reaches_the_sensor_transported(ft_model, icub):
+def test_hand_wrench_reaches_the_sensor_transported(ft_model, model):
     """A wrench on the hand adds, at the sensor, its transport to the sensor frame (eq 2
     read backwards), and adds -J^T w to the joint torques (eq 3)."""
     rng = np.random.default_rng(1)
-    q = icub.random_q(rng)
+    q = model.random_q(rng)
     w = rng.normal(size=6)
     r0 = ft_model.rnea(q)
     r1 = ft_model.rnea(q, hand_wrenches={"right": w})
@@ -64,7 +58,7 @@ def test_hand_wrench_reaches_the_sensor_transported(ft_model, icub):
     expected = -t_sh.act(pin.Force(w)).vector
     np.testing.assert_allclose(r1.sensor["right"] - r0.sensor["right"], expected, atol=1e-9)
     np.testing.assert_allclose(r1.sensor["left"], r0.sensor["left"], atol=1e-12)
-    jac = icub.frame_jacobian(q, "r_hand_dh_frame")
+    jac = model.frame_jacobian(q, "r_hand_dh_frame")
     w_root = np.concatenate([t_rh.rotation @ w[:3], t_rh.rotation @ w[3:]])
     np.testing.assert_allclose(r1.tau, r0.tau - jac.T @ w_root, atol=1e-9)
 
@@ -92,14 +86,14 @@ def test_bad_inputs_are_rejected(ft_model):
         ft_model.set_gravity([0, 0, float("nan")])
 
 
-def test_estimator_two_passes_equal_the_general_rnea(ft_model, icub):
+def test_estimator_two_passes_equal_the_general_rnea(ft_model, model):
     """The estimator's two passes (free_sensor_wrenches, then torques_with_sensor_excess) give
     the same sensor wrenches, hand wrenches and joint torques as the general rnea() with the
     hand wrenches applied: the external wrench on the distal arm given at the sensor is moved
     to the hand (eq 2) and folded into RNEA (eq 3)."""
     rng = np.random.default_rng(7)
     for _ in range(5):
-        q, v, a = icub.random_q(rng), rng.normal(size=ft_model.nq), rng.normal(size=ft_model.nq)
+        q, v, a = model.random_q(rng), rng.normal(size=ft_model.nq), rng.normal(size=ft_model.nq)
         excess = {h: rng.normal(size=6) for h in ("left", "right")}
         free = ft_model.free_sensor_wrenches(q, v, a)
         tau, ext_hand, ext_root = ft_model.torques_with_sensor_excess(excess)

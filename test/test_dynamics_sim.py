@@ -5,24 +5,16 @@ external hand wrenches vs the simulator's ground truth, contact flags."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
-from icub_pmp.control.sim_loop import SimLoop
-from icub_pmp.control.sim_scenarios import (
+from icub_sim_bridge.harness.sim_loop import SimLoop
+from icub_sim_bridge.harness.sim_scenarios import (
     press_left_hand_on_table,
     raised_posture,
     start_periodic_motion,
 )
-from icub_sim_bridge.sim_config import SimConfig
-from icub_sim_bridge.simulator import Simulator
 
 HANDS = ("left", "right")
-
-
-@pytest.fixture(scope="module")
-def sim() -> Simulator:
-    return Simulator(SimConfig(cameras_enabled=False))
 
 
 def _force_ok(est: np.ndarray, truth: np.ndarray) -> bool:

@@ -1,10 +1,9 @@
-"""The `icub` command line and scripts/run_node.sh over real DDS (issue 2)."""
+"""The `icub` command line and scripts/run_node.sh over real DDS."""
 
 from __future__ import annotations
 
 import subprocess
 import sys
-import time
 
 import pytest
 import yaml
@@ -68,7 +67,8 @@ def test_hz_within_ten_percent_of_publisher_rate(posture_node, ros_probe):
 @pytest.fixture(scope="module")
 def reach_server(ros_domain_id):
     """A Reach server in another process that logs each request it receives."""
-    cmd = [str(repo_root() / "scripts/env.sh"), sys.executable, "test/support/reach_echo_server.py"]
+    cmd = [str(repo_root() / "scripts/env.sh"), sys.executable, "-m",
+           "icub_pmp.testing.reach_echo_server"]
     with NodeProcess(command=cmd) as proc:
         assert proc.wait_for_output("READY", 30), proc.output()
         yield proc
@@ -92,8 +92,12 @@ def test_reach_bad_input_exits_with_one_line_and_sends_nothing(reach_server, arg
     err = out.stderr.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("icub: error:") and expected in err[0], out.stderr
     assert "Traceback" not in out.stderr
-    time.sleep(0.5)
-    assert reach_server.output().count("REQUEST") == before
+    # a good goal after it is the next request the server logs: the bad one sent nothing
+    tau = 100.0 + before  # names this request in the server's log
+    ok = icub("reach", "right=-0.3,0.1,0.0", "--tau", str(tau))
+    assert ok.returncode == 0, ok.stderr
+    assert reach_server.wait_for_output(f"tau={tau}", 30), reach_server.output()
+    assert reach_server.output().count("REQUEST") == before + 1
 
 
 def test_reach_round_trip_between_processes(reach_server, ros_probe):

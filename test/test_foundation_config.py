@@ -1,4 +1,4 @@
-"""Configuration loading: ConfigBase, ROS parameter files, the robot spec (issue 2)."""
+"""Configuration loading: ConfigBase, ROS parameter files (every shipped one), the robot spec."""
 
 from __future__ import annotations
 
@@ -7,9 +7,30 @@ import math
 
 import pytest
 
+from icub_pmp.cartesian import IkConfig, MinJerkConfig
 from icub_pmp.config import ConfigBase, config_dir, load_params_file
+from icub_pmp.control import ImpedanceControllerConfig
+from icub_pmp.dynamics import WrenchEstimatorConfig
 from icub_pmp.errors import ConfigError, UnknownName
 from icub_pmp.kinematics import IcubModel, RobotSpec
+from icub_pmp.pmp import PmpConfig
+from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
+from icub_pmp.ros.pmp_node_config import PmpNodeConfig
+from icub_pmp.ros.robot_state_publisher_config import RobotStatePublisherConfig
+from icub_pmp.vision import MotionSegmenterConfig
+from icub_sim_bridge import SimConfig
+
+#: config/<node>.yaml -> the configuration classes the node declares as its parameters
+NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
+    "cartesian_solver": (IkConfig, MinJerkConfig, CartesianNodeConfig),
+    "impedance_controller": (ImpedanceControllerConfig,),
+    "motion_segmenter": (MotionSegmenterConfig,),
+    "pmp_planner": (PmpConfig, PmpNodeConfig),
+    "robot_state_publisher": (RobotStatePublisherConfig,),
+    "sim_bridge": (SimConfig,),
+    "wrench_estimator": (WrenchEstimatorConfig,),
+}
+NOT_NODE_FILES = {"robot.yaml"}  # the robot description, not a --params-file
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,3 +113,26 @@ def test_every_shipped_params_file_parses():
             assert any(
                 isinstance(v, dict) and "ros__parameters" in v for v in data.values()
             ), f"{f.name} has no ros__parameters block"
+
+
+def test_every_shipped_params_file_has_its_configurations():
+    """Each config/<node>.yaml belongs to a node listed in NODE_CONFIGS (add yours there)."""
+    files = {f.stem for f in config_dir().glob("*.yaml") if f.name not in NOT_NODE_FILES}
+    assert files == set(NODE_CONFIGS), (
+        f"without an entry in NODE_CONFIGS: {sorted(files - set(NODE_CONFIGS))}; "
+        f"listed without a file: {sorted(set(NODE_CONFIGS) - files)}")
+
+
+@pytest.mark.parametrize("node", sorted(NODE_CONFIGS))
+def test_shipped_params_file_loads_into_its_configurations(node):
+    """config/<node>.yaml: every key is a field of one of the node's configuration classes
+    (field names = ROS parameter names) and each class builds from it (types and ranges
+    validated)."""
+    path = config_dir() / f"{node}.yaml"
+    params = load_params_file(path, node)
+    known: set[str] = set()
+    for cls in NODE_CONFIGS[node]:
+        cfg = cls.from_yaml(path, node)
+        known |= set(cls.field_names())
+        assert cfg == cls.from_dict({k: v for k, v in params.items() if k in cls.field_names()})
+    assert set(params) <= known, f"{path.name}: unknown keys {sorted(set(params) - known)}"

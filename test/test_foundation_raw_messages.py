@@ -11,8 +11,8 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
 
 from icub_pmp.errors import InvalidInput
-from icub_pmp.nodes.conversions import set_wrench
-from icub_pmp.nodes.raw_messages import RawJointStateReader, raw_wrench_stamped
+from icub_pmp.ros.conversions import set_wrench
+from icub_pmp.ros.raw_messages import RawJointStateReader, raw_wrench_stamped
 
 
 @pytest.mark.parametrize("frame", ["", "a", "ab", "abc", "abcd", "l_arm_ft", "r_arm_ft_x"])
@@ -77,7 +77,7 @@ def test_joint_state_writer_round_trips_through_rclpy(frame, present):
     frame_id and name lengths and with empty fields; a wrong-length field raises."""
     from rclpy.serialization import deserialize_message
 
-    from icub_pmp.nodes.raw_messages import RawJointStateWriter
+    from icub_pmp.ros.raw_messages import RawJointStateWriter
 
     names = ["torso_yaw", "l_elbow", "neck_pitchx", "a"]
     writer = RawJointStateWriter(names, frame)

@@ -7,9 +7,9 @@ import time
 import pytest
 from std_msgs.msg import String
 
-from icub_pmp.cartesian import CartesianNodeConfig
 from icub_pmp.errors import ConfigError
-from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
+from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
+from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 
 def test_waits_the_timeout_when_nobody_listens_then_says_so(ros_probe):

@@ -1,4 +1,4 @@
-"""The whole graph, launch-free (issue 8): nodes started through their scripts as
+"""The whole graph, launch-free: nodes started through their scripts as
 subprocesses, in the session's own ROS_DOMAIN_ID, exercised over DDS as a user does.
 
 The simulator runs in lockstep with the impedance controller (the 1 kHz loop is exact in

@@ -1,4 +1,4 @@
-"""Looming detector (issue 7, an addition to motionCUT): accumulated ego-motion residuals whose
+"""Looming detector (an addition to motionCUT): accumulated ego-motion residuals whose
 components expand or contract mark objects approaching or receding; uniform drifts (motion
 parallax) do not. Synthetic images: a textured canvas seen by a rotating camera, a textured
 patch growing in place (an object approaching along the optical axis)."""
@@ -10,12 +10,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from icub_pmp.vision import (
-    LoomingDetector,
-    MotionSegmenter,
-    MotionSegmenterConfig,
-    SyntheticSequence,
-)
+from icub_pmp.baselines import SyntheticSequence
+from icub_pmp.vision import LoomingDetector, MotionSegmenter, MotionSegmenterConfig
 from icub_pmp.vision.looming_detector import expansion
 
 

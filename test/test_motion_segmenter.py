@@ -1,4 +1,4 @@
-"""MotionSegmenter (issue 7): the eq. 13 LK-failure test, filters, blobs, bad input.
+"""MotionSegmenter: the eq. 13 LK-failure test, filters, blobs, bad input.
 
 Synthetic images (no simulator): a textured canvas seen through a rotating pinhole camera
 (homographies) with a textured patch moving on it.
@@ -12,14 +12,10 @@ import cv2
 import numpy as np
 import pytest
 
+from icub_pmp.baselines import SyntheticSequence, textured_image
 from icub_pmp.config import config_dir
 from icub_pmp.errors import ConfigError, InvalidInput
-from icub_pmp.vision import (
-    MotionSegmenter,
-    MotionSegmenterConfig,
-    SyntheticSequence,
-    textured_image,
-)
+from icub_pmp.vision import MotionSegmenter, MotionSegmenterConfig
 
 
 def _run(seq: SyntheticSequence, n: int, config: MotionSegmenterConfig | None = None):
@@ -188,8 +184,8 @@ def test_results_are_read_only():
         r.mask[0, 0] = 1
 
 
-def test_shipped_yaml_loads():
-    """config/motion_segmenter.yaml loads into MotionSegmenterConfig with motionCUT's grid,
+def test_shipped_values_are_motioncuts():
+    """config/motion_segmenter.yaml holds motionCUT's grid,
     neighbour, persistence and blob-size defaults, the 11 px window and 3 pyramid levels."""
     c = MotionSegmenterConfig.from_yaml(config_dir() / "motion_segmenter.yaml", "motion_segmenter")
     assert (c.grid_step, c.win_size, c.pyramid_levels) == (6, 11, 3)

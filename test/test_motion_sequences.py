@@ -1,4 +1,4 @@
-"""Evaluation data of the motion benchmark (issue 7): sequences rendered from the simulator's
+"""Evaluation data of the motion benchmark: sequences rendered from the simulator's
 eye cameras with MuJoCo ground truth, and the synthetic homography sequences."""
 
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from icub_pmp.baselines import SyntheticSequence
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.eye_kinematics import project_point
-from icub_pmp.vision import SyntheticSequence
-from icub_pmp.vision.sequence_generator import SequenceGenerator, SequenceSpec
+from icub_sim_bridge.harness.sequence_generator import SequenceGenerator, SequenceSpec
 
 
 def test_rendered_sequence_ground_truth():

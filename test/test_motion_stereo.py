@@ -1,4 +1,4 @@
-"""Stereo triangulation of motion targets (issue 7): pixel pairs -> a point in root_link with
+"""Stereo triangulation of motion targets: pixel pairs -> a point in root_link with
 the cameras' intrinsics and the head/eye kinematics."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from icub_pmp.errors import InvalidInput
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, project_point
 from icub_pmp.vision import MotionSegmenter, StereoTriangulator
 from icub_pmp.vision.head_cameras import HeadCameras
-from icub_pmp.vision.sequence_generator import SequenceGenerator, SequenceSpec
+from icub_sim_bridge.harness.sequence_generator import SequenceGenerator, SequenceSpec
 
 
 @pytest.fixture(scope="module")

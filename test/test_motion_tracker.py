@@ -1,17 +1,16 @@
-"""TargetTracker (issue 7): the largest blob is the target, followed smoothly over time."""
+"""TargetTracker: the largest blob is the target, followed smoothly over time."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from icub_pmp.baselines import SyntheticSequence, textured_image
 from icub_pmp.vision import (
     MotionBlob,
     MotionBlobs,
     MotionSegmenter,
     MotionSegmenterConfig,
-    SyntheticSequence,
     TargetTracker,
-    textured_image,
 )
 
 

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from icub_pmp.config import config_dir
 from icub_pmp.errors import ConfigError, InvalidInput
 from icub_pmp.kinematics import RobotSpec
 from icub_pmp.pmp import (
@@ -230,12 +229,6 @@ def test_branch_network_validation():
 
 
 # ---------------------------------------------------------------------- configuration
-def test_shipped_yaml_loads_into_pmp_config():
-    """config/pmp_planner.yaml holds a valid PmpConfig (field names = ROS parameter names)."""
-    cfg = PmpConfig.from_yaml(config_dir() / "pmp_planner.yaml", "pmp_planner")
-    assert cfg.tau > 0 and len(cfg.arm_admittance) == 7
-
-
 def test_pmp_config_rejects_bad_values():
     """Out-of-range values raise ConfigError naming the field; unknown keys are rejected."""
     with pytest.raises(ConfigError, match="tau"):

@@ -12,8 +12,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import Reach
-from icub_pmp.kinematics import IcubModel
-from icub_pmp.nodes.conversions import duration_to_sec, make_joint_state
+from icub_pmp.ros.conversions import duration_to_sec, make_joint_state
 from icub_pmp.testing import NodeProcess, repo_root
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -28,11 +27,6 @@ def node(ros_domain_id):
         yield proc
     finally:
         proc.stop()
-
-
-@pytest.fixture(scope="module")
-def model():
-    return IcubModel()
 
 
 def request(hands=("right",), right=(-0.30, 0.15, 0.05), left=(-0.30, -0.15, 0.05), **kw):
@@ -118,8 +112,7 @@ def test_reach_service_over_dds(node, ros_probe, model):
     resp = ros_probe.call("/pmp/reach", Reach, request(hands=("left", "right"),
                                                        simulate_only=True, use_torso=True))
     assert resp.success and list(resp.hands) == ["left", "right"], resp.message
-    ros_probe.wait_for(lambda: False, 0.5)
-    assert len(traj.msgs) == n_traj
+    _next_published_is(ros_probe, traj, n_traj)
 
     # 4. start_state given: the trajectory starts there
     start = make_joint_state(["r_elbow"], position=[0.5])
@@ -128,6 +121,19 @@ def test_reach_service_over_dds(node, ros_probe, model):
     assert first["r_elbow"] == pytest.approx(0.5)
     assert first["r_shoulder_pitch"] == pytest.approx(-0.6)  # from /joint_states
     ros_probe.destroy(pub)
+
+
+def _next_published_is(probe, traj, n: int) -> None:
+    """Nothing was published after the first ``n`` trajectories: a plan executed now is the
+    next to arrive (one reliable publisher keeps its order). Its start_state makes it
+    executable with or without /joint_states."""
+    start = make_joint_state(["r_elbow"], position=[0.5])
+    resp = probe.call("/pmp/reach", Reach, request(start_state=start))
+    assert resp.success and "published" in resp.message, resp.message
+    assert probe.wait_for(lambda: len(traj.msgs) > n, 10.0)
+    sent = traj.msgs[n]
+    assert len(traj.msgs) == n + 1
+    assert [p.positions for p in sent.points] == [p.positions for p in resp.trajectory.points]
 
 
 def test_bad_goals_answer_false_and_node_survives(node, ros_probe):
@@ -160,8 +166,7 @@ def test_bad_goals_answer_false_and_node_survives(node, ros_probe):
     resp = ros_probe.call("/pmp/reach", Reach, request(right=(-0.9, 0.6, 0.5)))
     assert not resp.success and "out of reach" in resp.message and "not executed" in resp.message
     assert resp.residuals[0] > 0.2  # the gap a tool would have to bridge [m]
-    ros_probe.wait_for(lambda: False, 0.5)
-    assert traj.msgs == []
+    _next_published_is(ros_probe, traj, 0)
     assert node.alive()
     resp = ros_probe.call("/pmp/reach", Reach, request(simulate_only=True))
     assert resp.success, resp.message

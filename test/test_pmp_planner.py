@@ -7,10 +7,10 @@ import dataclasses
 import numpy as np
 import pytest
 
+from icub_pmp.baselines import PMP_DLS_CONFIG, DlsSolver
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics import RobotSpec
 from icub_pmp.pmp import (
-    DlsSolver,
     HeldObject,
     ObstacleField,
     PmpConfig,
@@ -285,13 +285,13 @@ def test_torque_limits_respected_after_null_space_settling(rest):
     plain = planner0.plan(ReachGoal(targets={"right": target}, use_torso=False), rest)
     tau_plain = planner0.provider.static_torques(plain.q_final, fr, force[None], True)
     assert np.max(np.abs(tau_plain[arm]) / rating[arm]) > 1.0  # plain PMP violates
-    dls = DlsSolver(planner0.provider, spec.right_arm_joints, fr)
+    dls = DlsSolver(planner0.provider, PMP_DLS_CONFIG)
     rng = np.random.default_rng(15)
     feasible = 0
     for _ in range(60):
         q = rest.copy()
         q[arm] = rng.uniform(planner0.provider.lower[arm], planner0.provider.upper[arm])
-        sol = dls.solve(q, target[None])
+        sol = dls.solve(q, spec.right_arm_joints, fr, target[None])
         tau = planner0.provider.static_torques(sol.q, fr, force[None], True)
         feasible += sol.success and np.all(np.abs(tau[arm]) <= 0.95 * rating[arm])
     assert feasible > 0
@@ -426,17 +426,6 @@ def test_bad_goals_raise_clear_errors(planner, rest):
     q[planner.provider.joint_names.index("r_elbow")] = 3.0
     with pytest.raises(InvalidInput, match="r_elbow"):
         planner.plan(ReachGoal(targets={"right": [-0.3, 0.2, 0.0]}), q)
-
-
-def test_dls_baseline_solves_reachable_targets(planner, rest):
-    """The DLS baseline (Sect. 1) reaches a reachable bimanual target from rest."""
-    rng = np.random.default_rng(17)
-    targets = random_reachable(planner, rest, rng)
-    spec = planner.spec
-    joints = spec.torso_joints + spec.left_arm_joints + spec.right_arm_joints
-    dls = DlsSolver(planner.provider, joints, frames(planner))
-    sol = dls.solve(rest, np.array([targets["left"], targets["right"]]))
-    assert sol.success and sol.residuals.max() <= 1 * MM
 
 
 def test_synchronise_hands_option_brings_the_hands_in_step(rest):

@@ -3,8 +3,6 @@ stamped like the state it answers (its own module: no other sim_bridge in the do
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
@@ -54,10 +52,10 @@ def test_lockstep_waits_for_the_answer(ros_domain_id, ros_probe):
         sub = node.create_subscription(JointState, "/joint_states", cb, qos_profile_sensor_data)
         assert ros_probe.wait_for(lambda: answer["left"] == 0 and len(seen) >= 30, 30.0), \
             proc.output()[-2000:]
-        time.sleep(0.5)
-        n = len(seen)
-        time.sleep(0.5)
-        assert len(seen) == n  # no answer, no step (within the 3 s timeout)
+        # no answer, no step: the state after our last answer waits the whole timeout
+        last = max(seen) + 1_000_000
+        assert proc.wait_for_output(f"stamped t = {last * 1e-9:.3f} s within", 30.0), \
+            proc.output()[-2000:]
         d = np.diff(sorted(set(seen)))
         assert np.all(d == 1_000_000)
         # services are served while the loop waits (it spins the executor itself)

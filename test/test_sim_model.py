@@ -10,20 +10,10 @@ import pytest
 from icub_pmp.errors import ConfigError, InvalidInput, UnknownName
 from icub_pmp.kinematics import IcubModel, RobotSpec
 from icub_pmp.kinematics.eye_kinematics import EyeKinematics, dh_transform
-from icub_sim_bridge import SimConfig, Simulator
+from icub_sim_bridge import SimConfig
 from icub_sim_bridge.model_builder import EYE_CAMERAS
 from icub_sim_bridge.tri_mesh import TriMesh
 from icub_sim_bridge.urdf_robot import rpy_matrix
-
-
-@pytest.fixture(scope="module")
-def sim() -> Simulator:
-    return Simulator(SimConfig(cameras_enabled=False))
-
-
-@pytest.fixture(scope="module")
-def pin_model() -> IcubModel:
-    return IcubModel()
 
 
 def _q_dict(model: IcubModel, q: np.ndarray) -> dict[str, float]:
@@ -79,23 +69,23 @@ def test_written_mjcf_loads(sim, tmp_path):
                                                           a.njnt)
 
 
-def test_joint_limits_match_pinocchio(sim, pin_model):
+def test_joint_limits_match_pinocchio(sim, model):
     """Joint limits [rad] of the 20 URDF joints equal pinocchio's (same URDF)."""
-    idx = sim.indices(pin_model.joint_names)
-    np.testing.assert_allclose(sim.lower[idx], pin_model.lower, atol=1e-12)
-    np.testing.assert_allclose(sim.upper[idx], pin_model.upper, atol=1e-12)
+    idx = sim.indices(model.joint_names)
+    np.testing.assert_allclose(sim.lower[idx], model.lower, atol=1e-12)
+    np.testing.assert_allclose(sim.upper[idx], model.upper, atol=1e-12)
 
 
-def test_hand_positions_match_pinocchio(sim, pin_model):
+def test_hand_positions_match_pinocchio(sim, model):
     """Over 30 random configurations within the limits, both hand frames (and the arm FT and
     head frames) are where pinocchio puts them, to 1e-6 m and 1e-6 rad."""
     rng = np.random.default_rng(3)
     frames = ("l_hand_dh_frame", "r_hand_dh_frame", "l_arm_ft", "r_arm_ft", "head_imu_0")
     for _ in range(30):
-        q = pin_model.random_q(rng)
-        sim.reset(q=_q_dict(pin_model, q))
+        q = model.random_q(rng)
+        sim.reset(q=_q_dict(model, q))
         for f in frames:
-            T = pin_model.frame_pose(q, f)
+            T = model.frame_pose(q, f)
             pose = sim.frame_pose(f)
             np.testing.assert_allclose(pose.position, T.translation, atol=1e-6)
             R = np.zeros(9)
@@ -103,32 +93,32 @@ def test_hand_positions_match_pinocchio(sim, pin_model):
             np.testing.assert_allclose(R.reshape(3, 3), T.rotation, atol=1e-6)
 
 
-def test_masses_match_pinocchio(sim, pin_model):
+def test_masses_match_pinocchio(sim, model):
     """The robot's total mass in MuJoCo equals pinocchio's (URDF inertials, legs included)."""
     m = sim.model
     robot = [i for i in range(1, m.nbody) if m.body(i).name not in ("table", "box", "cylinder")]
     total = sum(m.body_mass[i] for i in robot)
-    pin_total = sum(inertia.mass for inertia in pin_model.model.inertias)
+    pin_total = sum(inertia.mass for inertia in model.model.inertias)
     assert total == pytest.approx(pin_total, rel=1e-3)  # + 3 g of eye bodies
 
 
-def test_cameras_match_eye_kinematics(sim, pin_model):
+def test_cameras_match_eye_kinematics(sim, model):
     """The two MuJoCo eye cameras sit at EyeKinematics.T_root_camera (optical frame turned pi
     about x), for random torso/neck/eye angles, to 1e-9."""
     rng = np.random.default_rng(5)
     eyes = sim.built.eye_kinematics
     for _ in range(10):
-        q = pin_model.random_q(rng)
+        q = model.random_q(rng)
         tilt, version, vergence = rng.uniform(-0.5, 0.2), rng.uniform(-0.4, 0.4), \
             rng.uniform(0.0, 0.5)
-        qd = _q_dict(pin_model, q) | {"eyes_tilt": tilt, "eyes_version": version,
+        qd = _q_dict(model, q) | {"eyes_tilt": tilt, "eyes_version": version,
                                       "eyes_vergence": vergence}
         sim.reset(q=qd)
         st = sim.joint_state()
         np.testing.assert_allclose(st.position[sim.indices(["eyes_tilt", "eyes_version",
                                                              "eyes_vergence"])],
                                    [tilt, version, vergence], atol=1e-12)
-        T_head = pin_model.frame_pose(q, "head").homogeneous
+        T_head = model.frame_pose(q, "head").homogeneous
         for side in ("left", "right"):
             T = eyes.T_root_camera(T_head, side, tilt, version, vergence)
             c = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_CAMERA, EYE_CAMERAS[side])
@@ -137,11 +127,11 @@ def test_cameras_match_eye_kinematics(sim, pin_model):
                                        T[:3, :3] @ np.diag([1.0, -1.0, -1.0]), atol=1e-9)
 
 
-def test_eye_kinematics_geometry(pin_model):
+def test_eye_kinematics_geometry(model):
     """Eyes 0.068 m apart, left eye on the robot's left (-y), optical axes forward (-x) at
     zero; positive vergence converges; pans/version_vergence are inverse maps."""
-    eyes = EyeKinematics.from_model(pin_model)
-    T_head = pin_model.frame_pose(np.zeros(pin_model.nq), "head").homogeneous
+    eyes = EyeKinematics.from_model(model)
+    T_head = model.frame_pose(np.zeros(model.nq), "head").homogeneous
     Tl = eyes.T_root_camera(T_head, "left", 0.0, 0.0, 0.0)
     Tr = eyes.T_root_camera(T_head, "right", 0.0, 0.0, 0.0)
     assert np.linalg.norm(Tl[:3, 3] - Tr[:3, 3]) == pytest.approx(0.068, abs=1e-12)
@@ -190,9 +180,8 @@ def test_config_validation():
         SimConfig(box_position=(0.1, 0.2))
 
 
-def test_shipped_yaml_loads():
-    """config/sim_bridge.yaml loads into SimConfig (every key a SimConfig field, no unknown
-    key) with the contract's camera intrinsics."""
+def test_shipped_camera_intrinsics():
+    """config/sim_bridge.yaml holds the Gazebo iCub's eye-camera intrinsics and a 1 ms step."""
     from icub_pmp.config import config_dir, load_params_file
 
     cfg = SimConfig.from_dict(load_params_file(config_dir() / "sim_bridge.yaml", "sim_bridge"))

@@ -7,39 +7,29 @@ import numpy as np
 import pytest
 
 from icub_pmp.kinematics import IcubModel
-from icub_sim_bridge import FT_SENSORS, SimConfig, Simulator
+from icub_sim_bridge import FT_SENSORS, Simulator
 from icub_sim_bridge.urdf_robot import UrdfRobot
 
 G = np.array([0.0, 0.0, -9.81])
 
 
 @pytest.fixture(scope="module")
-def sim() -> Simulator:
-    return Simulator(SimConfig(cameras_enabled=False))
+def urdf(model) -> UrdfRobot:
+    return UrdfRobot(model.urdf)
 
 
-@pytest.fixture(scope="module")
-def pin_model() -> IcubModel:
-    return IcubModel()
+def _q_pin(sim: Simulator, model: IcubModel) -> np.ndarray:
+    return sim.joint_state().position[sim.indices(model.joint_names)]
 
 
-@pytest.fixture(scope="module")
-def urdf(pin_model) -> UrdfRobot:
-    return UrdfRobot(pin_model.urdf)
-
-
-def _q_pin(sim: Simulator, pin_model: IcubModel) -> np.ndarray:
-    return sim.joint_state().position[sim.indices(pin_model.joint_names)]
-
-
-def expected_static_ft(pin_model: IcubModel, urdf: UrdfRobot, q: np.ndarray, ft: str,
+def expected_static_ft(model: IcubModel, urdf: UrdfRobot, q: np.ndarray, ft: str,
                        f_ext: np.ndarray | None = None, p_ext: np.ndarray | None = None
                        ) -> np.ndarray:
     """(6,) wrench the links distal to FT joint ``<ft>_sensor`` exert on the proximal side,
     in the FT frame, about its origin: weights (URDF masses and COMs placed by pinocchio's
     link frames) plus an optional external force ``f_ext`` at ``p_ext`` (root_link)."""
     child = urdf.joint(f"{ft}_sensor").child
-    T_ft = pin_model.frame_pose(q, ft)
+    T_ft = model.frame_pose(q, ft)
     p, R = T_ft.translation, T_ft.rotation
     f = np.zeros(3)
     tau = np.zeros(3)
@@ -47,7 +37,7 @@ def expected_static_ft(pin_model: IcubModel, urdf: UrdfRobot, q: np.ndarray, ft:
         inertial = urdf.links[link].inertial
         if inertial is None or inertial.mass == 0:
             continue
-        T = pin_model.frame_pose(q, link).homogeneous
+        T = model.frame_pose(q, link).homogeneous
         c = T[:3, :3] @ inertial.T_link_com[:3, 3] + T[:3, 3]
         w = inertial.mass * G
         f += w
@@ -70,7 +60,7 @@ def _clear_table(sim: Simulator) -> None:
     sim.set_object_pose("cylinder", [-0.58, 0.3, -0.03])
 
 
-def _raised_posture(pin_model: IcubModel) -> dict[str, float]:
+def _raised_posture(model: IcubModel) -> dict[str, float]:
     q = {"l_shoulder_pitch": -1.0, "l_shoulder_roll": 0.6, "l_elbow": 1.2,
          "r_shoulder_pitch": -0.4, "r_shoulder_roll": 1.0, "r_shoulder_yaw": 0.3,
          "r_elbow": 0.5, "r_wrist_pitch": -0.3, "torso_pitch": 0.2, "torso_yaw": -0.3}
@@ -78,35 +68,35 @@ def _raised_posture(pin_model: IcubModel) -> dict[str, float]:
 
 
 @pytest.mark.parametrize("posture", ["rest", "raised", "zero"])
-def test_ft_statics_match_distal_weight(sim, pin_model, urdf, posture):
+def test_ft_statics_match_distal_weight(sim, model, urdf, posture):
     """Held still (gravity on), each of the four FT sensors reads the weight and moment of
     everything distal to it (URDF inertials at pinocchio's link poses), within 1 %."""
     if posture == "raised":
-        sim.reset(q=_raised_posture(pin_model))
+        sim.reset(q=_raised_posture(model))
     else:
         sim.reset(posture)
     _clear_table(sim)
     sim.step(300)
     assert np.abs(sim.joint_state().velocity).max() < 1e-6
-    q = _q_pin(sim, pin_model)
+    q = _q_pin(sim, model)
     for k, ft in enumerate(FT_SENSORS):
-        _close(sim.ft_all()[k], expected_static_ft(pin_model, urdf, q, ft), 0.01)
+        _close(sim.ft_all()[k], expected_static_ft(model, urdf, q, ft), 0.01)
 
 
-def test_ft_sign_convention_child_to_parent(sim, pin_model):
+def test_ft_sign_convention_child_to_parent(sim, model):
     """An arm at rest: the l_arm_ft force rotated to root_link points DOWN with the distal
     weight (the child link pushes on the parent: URDF child_to_parent), not up."""
     sim.reset("rest")
     sim.step(50)
-    q = _q_pin(sim, pin_model)
-    R = pin_model.frame_pose(q, "l_arm_ft").rotation
+    q = _q_pin(sim, model)
+    R = model.frame_pose(q, "l_arm_ft").rotation
     f_root = R @ sim.ft("l_arm_ft").force
     assert f_root[2] < -5.0  # about 1.9 kg of arm
     assert abs(f_root[0]) < 1e-6 and abs(f_root[1]) < 1e-6
 
 
 @pytest.mark.parametrize("hand,ft", [("right", "r_arm_ft"), ("left", "l_arm_ft")])
-def test_external_force_shows_in_arm_ft_with_lever_arm(sim, pin_model, urdf, hand, ft):
+def test_external_force_shows_in_arm_ft_with_lever_arm(sim, model, urdf, hand, ft):
     """A known force applied at the hand frame (xfrc_applied) appears in that arm's FT sensor
     as the force plus its moment about the sensor (lever arm hand - sensor), within 1 %; the
     other arm's sensor does not see it."""
@@ -119,17 +109,17 @@ def test_external_force_shows_in_arm_ft_with_lever_arm(sim, pin_model, urdf, han
     sim.apply_wrench(frame, f_ext, np.zeros(3), duration=5.0)
     sim.step(1500)  # settles on the joint hold
     assert np.abs(sim.joint_state().velocity).max() < 1e-4
-    q = _q_pin(sim, pin_model)
-    p_hand = pin_model.frame_position(q, frame)
+    q = _q_pin(sim, model)
+    p_hand = model.frame_position(q, frame)
     k = FT_SENSORS.index(ft)
     measured = sim.ft_all()[k]
-    expected = expected_static_ft(pin_model, urdf, q, ft, f_ext, p_hand)
-    gravity_only = expected_static_ft(pin_model, urdf, q, ft)
+    expected = expected_static_ft(model, urdf, q, ft, f_ext, p_hand)
+    gravity_only = expected_static_ft(model, urdf, q, ft)
     _close(measured - gravity_only, expected - gravity_only, 0.01)
     _close(measured, expected, 0.01)
     # the other arm only carries its own weight (in its frame, which the torso tilted a bit)
     _close(sim.ft_all()[FT_SENSORS.index(other)],
-           expected_static_ft(pin_model, urdf, q, other), 0.01)
+           expected_static_ft(model, urdf, q, other), 0.01)
 
 
 def test_ground_truth_contact_wrench(sim):
@@ -163,13 +153,13 @@ def test_ground_truth_sees_table_contact(sim):
     assert np.abs(sim.contact_wrench("right").force).max() < 1e-9
 
 
-def test_imu_reads_gravity_and_head_orientation(sim, pin_model):
+def test_imu_reads_gravity_and_head_orientation(sim, model):
     """Still, the head IMU's proper acceleration rotated to root_link is +9.81 m/s^2 up, its
     gyro reads zero and its orientation is pinocchio's head_imu_0 frame."""
     sim.reset("rest")
     sim.step(20)
     imu = sim.imu()
-    T = pin_model.frame_pose(_q_pin(sim, pin_model), "head_imu_0")
+    T = model.frame_pose(_q_pin(sim, model), "head_imu_0")
     import mujoco
 
     R = np.zeros(9)

@@ -8,12 +8,6 @@ import pytest
 
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics import RobotSpec
-from icub_sim_bridge import SimConfig, Simulator
-
-
-@pytest.fixture(scope="module")
-def sim() -> Simulator:
-    return Simulator(SimConfig(cameras_enabled=False))
 
 
 def test_reset_puts_posture_and_holds_it(sim):

@@ -3,7 +3,7 @@
 A bag is a directory with ``metadata.yaml`` and one ``.mcap`` file of CDR messages with
 ``ros2msg`` schemas, written with ``rosbags`` and read with the official ``mcap`` records, so a
 stock ``ros2 bag play`` and Foxglove open it. The rclpy side (recording from the graph,
-replaying) is in ``icub_pmp.nodes.bag_recorder`` / ``bag_player``; the CLI is ``icub bag``.
+replaying) is in ``icub_pmp.ros.bag_recorder`` / ``bag_player``; the CLI is ``icub bag``.
 """
 
 from icub_pmp.bags.bag_reader import BagInfo, BagMessage, BagReader, BagStatus, BagTopic

@@ -5,14 +5,13 @@ iCub); no ROS imports.
 """
 
 from icub_pmp.cartesian.arm_linear_constraints import ArmLinearConstraints, LinearConstraints
-from icub_pmp.cartesian.cartesian_node_config import CartesianNodeConfig
+from icub_pmp.cartesian.cartesian_controller import CartesianController, CartesianMotion
 from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
-from icub_pmp.cartesian.dls_solver import DlsConfig, DlsSolver
 from icub_pmp.cartesian.ik_config import IkConfig
 from icub_pmp.cartesian.ik_problem import IkProblem, NlpConstraint
 from icub_pmp.cartesian.ik_seed import IkSeed
 from icub_pmp.cartesian.ik_solution import IkSolution
-from icub_pmp.cartesian.ik_solver import IkSolver, rotation_angle
+from icub_pmp.cartesian.ik_solver import IkSolver
 from icub_pmp.cartesian.kinematic_chain import CHAIN_NAMES, KinematicChain
 from icub_pmp.cartesian.min_jerk_config import MinJerkConfig
 from icub_pmp.cartesian.min_jerk_filter import MinJerkFilter
@@ -20,19 +19,17 @@ from icub_pmp.cartesian.min_jerk_generator import MinJerkGenerator
 from icub_pmp.cartesian.sampled_trajectory import GeneratorState, SampledTrajectory
 
 __all__ = [
+    "CartesianController",
+    "CartesianMotion",
     "ArmLinearConstraints",
     "LinearConstraints",
-    "CartesianNodeConfig",
     "CasadiKinematics",
-    "DlsConfig",
-    "DlsSolver",
     "IkConfig",
     "IkProblem",
     "NlpConstraint",
     "IkSeed",
     "IkSolution",
     "IkSolver",
-    "rotation_angle",
     "CHAIN_NAMES",
     "KinematicChain",
     "MinJerkConfig",

@@ -3,7 +3,8 @@
 The reaching paper (Sect. 4, item 5) adds "a set of constraints that avoid reaching the limits
 of the tendons that actuate the three joints of the shoulder". These are the seven linear
 inequalities iKin adds to every iCub arm chain (``iCubAdditionalArmConstraints``; numbers from
-ICUB_FACTS.md section 1a and the icub-tech page "Range of Motion of the iCub Shoulders"), in
+icub-main iKinFwd.cpp iCubAdditionalArmConstraints and the icub-tech page "Range of Motion of
+the iCub Shoulders"), in
 the URDF joint angles q0 shoulder_pitch, q1 shoulder_roll, q2 shoulder_yaw, q3 elbow,
 q4 wrist_prosup (same signs on both arms):
 

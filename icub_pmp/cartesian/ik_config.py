@@ -13,7 +13,7 @@ __all__ = ["IkConfig"]
 
 @dataclasses.dataclass(frozen=True)
 class IkConfig(ConfigBase):
-    """Eq 11 of the reaching paper, solved by IPOPT (defaults: iKinCartesianSolver, ICUB_FACTS 1a).
+    """Eq 11 of the reaching paper, solved by IPOPT (defaults: icub-main iKinSlv.cpp).
 
     ``epsilon`` bounds the SQUARED position error: the paper's [1e-5, 1e-4] m^2 allows
     3.2-10 mm. The default 2.5e-7 m^2 allows 0.5 mm, half of the 1 mm accuracy goal: IPOPT

@@ -22,31 +22,21 @@ all weights are run-time parameters or bounds, so changing them never rebuilds t
 from __future__ import annotations
 
 import dataclasses
-import logging
-import os
 from typing import Any, Callable, NamedTuple, Sequence
 
-# IPOPT's linear solver (MUMPS) is built with OpenMP; on a 10-variable problem its thread pool
-# costs more than it gives (about 20 % per solve measured here). Must be set before the IPOPT
-# plugin loads; a value set by the user wins.
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-
-import casadi as ca  # noqa: E402
-import numpy as np  # noqa: E402
+import casadi as ca
+import numpy as np
 
 from icub_pmp.cartesian.arm_linear_constraints import ArmLinearConstraints, LinearConstraints
 from icub_pmp.cartesian.casadi_kinematics import CasadiKinematics
 from icub_pmp.cartesian.ik_config import IkConfig
 from icub_pmp.cartesian.kinematic_chain import KinematicChain
 from icub_pmp.cartesian.nlp_codegen import compiled_nlpsol
+from icub_pmp.cartesian.nlp_scaling import POSITION_SCALE, SLACK_SCALE
 from icub_pmp.errors import InvalidInput
 from icub_pmp.kinematics.robot_model import IcubModel
 
-__all__ = ["IkProblem", "NlpConstraint", "POSITION_SCALE", "SLACK_SCALE"]
-
-_LOG = logging.getLogger(__name__)
-POSITION_SCALE = 1e4  # m^2 -> cm^2 for the bound on the squared position error inside the NLP
-SLACK_SCALE = 1e2  # m -> cm for the equality x_d - K_x(q) - s = 0 inside the NLP
+__all__ = ["IkProblem", "NlpConstraint"]
 
 
 class NlpConstraint(NamedTuple):
@@ -94,7 +84,8 @@ class IkProblem:
         linear: the linear constraints (C, lb, ub) over ``q`` (empty when disabled).
         solver: the CasADi ``nlpsol`` (IPOPT, exact Hessian).
         warm_solver: the same NLP and IPOPT, set to start from a given primal-dual point
-            (the seed's, see :attr:`seed`).
+            (the warm-start seed's, :class:`~icub_pmp.cartesian.ik_seed.IkSeed`, which
+            :class:`~icub_pmp.cartesian.ik_solver.IkSolver` builds for it).
         compiled: whether the NLP functions run as compiled C.
     """
 
@@ -200,18 +191,8 @@ class IkProblem:
             self.solver = ca.nlpsol(name, "ipopt", nlp, opts)
             self.warm_solver = ca.nlpsol(name, "ipopt", nlp, warm_opts)
             self.compiled = False
-        self._seed = None
         self.n_linear = 0 if self.linear is None else self.linear.C.shape[0]
         self._fk_position = ca.Function("fk_position", [self.q, self.p], [fk_pos])
-
-    @property
-    def seed(self):
-        """The compiled warm-start seed (:class:`IkSeed`), built on first use."""
-        if self._seed is None:
-            from icub_pmp.cartesian.ik_seed import IkSeed
-
-            self._seed = IkSeed(self, codegen=self.config.codegen)
-        return self._seed
 
     # ------------------------------------------------------------------ run-time data
     def parameters(

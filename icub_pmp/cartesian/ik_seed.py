@@ -43,8 +43,9 @@ import math
 import casadi as ca
 import numpy as np
 
-from icub_pmp.cartesian.ik_problem import POSITION_SCALE, SLACK_SCALE
+from icub_pmp.cartesian.ik_problem import IkProblem
 from icub_pmp.cartesian.nlp_codegen import compiled_function
+from icub_pmp.cartesian.nlp_scaling import POSITION_SCALE, SLACK_SCALE
 
 __all__ = ["IkSeed"]
 
@@ -69,7 +70,7 @@ class IkSeed:
 
     def __init__(
         self,
-        problem,
+        problem: IkProblem,
         n_iter: int = 24,
         n_gauss: int = 10,
         max_step: float = 0.5,

@@ -22,21 +22,17 @@ import numpy as np
 
 from icub_pmp.cartesian.ik_config import IkConfig
 from icub_pmp.cartesian.ik_problem import IkProblem, NlpConstraint
+from icub_pmp.cartesian.ik_seed import IkSeed
 from icub_pmp.cartesian.ik_solution import IkSolution
 from icub_pmp.cartesian.kinematic_chain import CHAIN_NAMES, KinematicChain
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_model import IcubModel
+from icub_pmp.kinematics.rotations import as_rotation, as_vector, rotation_angle
 
-__all__ = ["IkSolver", "rotation_angle"]
+__all__ = ["IkSolver"]
 
 _CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 _VIOLATION_OK = 1e-6  # largest accepted violation of limits / linear constraints [rad]
-
-
-def rotation_angle(R_a: np.ndarray, R_b: np.ndarray) -> float:
-    """Angle [rad] of the rotation between two rotation matrices (0 .. pi)."""
-    c = (float(np.trace(np.asarray(R_a).T @ np.asarray(R_b))) - 1.0) / 2.0
-    return math.acos(min(1.0, max(-1.0, c)))
 
 
 class IkSolver:
@@ -62,6 +58,7 @@ class IkSolver:
             if name not in CHAIN_NAMES:
                 raise UnknownName("chain", name, CHAIN_NAMES)
         self._problems: dict[str, IkProblem] = {}
+        self._seeds: dict[str, IkSeed] = {}
         self._q_rest_full = self.model.posture(self.config.rest_posture)
 
     # ------------------------------------------------------------------ build
@@ -75,6 +72,7 @@ class IkSolver:
         built with changed (epsilon, weights and rest posture never need a rebuild)."""
         if any(getattr(config, f) != getattr(self.config, f) for f in self._BUILD_FIELDS):
             self._problems.clear()
+            self._seeds.clear()
         self.config = config
         self._q_rest_full = self.model.posture(config.rest_posture)
 
@@ -90,8 +88,16 @@ class IkSolver:
             )
         prob = self._problems[chain]
         if self.config.seed_warm_start:
-            _ = prob.seed  # built (and compiled) on first access
+            self.seed(chain)  # built (and compiled) with the problem, never during a request
         return prob
+
+    def seed(self, chain: str) -> IkSeed:
+        """The (cached) warm-start seed of ``chain``'s NLP; builds both on first use."""
+        if chain not in self._seeds:
+            prob = self._problems.get(chain) or self.problem(chain)
+            if chain not in self._seeds:
+                self._seeds[chain] = IkSeed(prob, codegen=self.config.codegen)
+        return self._seeds[chain]
 
     def rest_weights(self, chain: KinematicChain) -> np.ndarray:
         """beta * diag(W) over the chain's optimised joints."""
@@ -126,8 +132,8 @@ class IkSolver:
             UnknownName: unknown chain. InvalidInput: NaN/inf, bad shapes, non-rotation.
         """
         prob = self.problem(chain)
-        x_d = _vector(position, 3, "position")
-        R_d = None if rotation is None else _rotation(rotation)
+        x_d = as_vector(position, 3, "position")
+        R_d = None if rotation is None else as_rotation(rotation)
         q_full = self._q_rest_full if q_start is None else self.model.check_q(q_start)
         w_ori = self.config.orientation_weight if orientation_weight is None else orientation_weight
         if not (math.isfinite(w_ori) and w_ori >= 0):
@@ -177,7 +183,8 @@ class IkSolver:
         q_seed, n = x0, prob.chain.n
         for _ in range(self.SEED_CALLS):
             try:
-                xs, lam_x, lam_g, perr, minimum = prob.seed(q_seed, bounds["p"], eps)
+                xs, lam_x, lam_g, perr, minimum = self.seed(prob.chain.name)(
+                    q_seed, bounds["p"], eps)
             except RuntimeError:
                 return False, x0, "exception", "seed failed", 0
             if not np.all(np.isfinite(xs)):
@@ -258,27 +265,3 @@ def _run(solver, n: int, q_fallback: np.ndarray, **args):
     if not np.all(np.isfinite(q)):
         return q_fallback, "exception", "non-finite answer", iterations
     return q, status, status, iterations
-
-
-def _vector(v, n: int, name: str) -> np.ndarray:
-    try:
-        a = np.asarray(v, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidInput(f"{name}: expected {n} numbers, got {v!r}") from None
-    if a.shape != (n,):
-        raise InvalidInput(f"{name}: expected {n} values, got {a.size}")
-    if not np.all(np.isfinite(a)):
-        raise InvalidInput(f"{name}: contains NaN or infinite values: {a.tolist()}")
-    return a
-
-
-def _rotation(R) -> np.ndarray:
-    try:
-        R = np.asarray(R, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidInput(f"rotation: expected a 3x3 matrix, got {R!r}") from None
-    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
-        raise InvalidInput(f"rotation: expected a finite 3x3 matrix, got shape {R.shape}")
-    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
-        raise InvalidInput("rotation: not a rotation matrix (R^T R != I or det < 0)")
-    return R

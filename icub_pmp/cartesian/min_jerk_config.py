@@ -13,7 +13,8 @@ __all__ = ["MinJerkConfig"]
 
 @dataclasses.dataclass(frozen=True)
 class MinJerkConfig(ConfigBase):
-    """Defaults from iKin's cartesianController (ICUB_FACTS.md 1a).
+    """Defaults from iKin's cartesianController (icub-main ServerCartesianController.cpp,
+    iKinInv.cpp).
 
     Attributes:
         trajectory_time: T of the min-jerk generators [s] (2 s as in Fig 9; >= 10 period).

@@ -2,7 +2,7 @@
 
 Per axis, the controller maps the position error e = x_d - x_fb to a velocity command u with
 the LTI filter ``F(s) = -a / (s^2 - c s - b)``, ``a = -150.766/T^3``, ``b = -84.981/T^2``,
-``c = -15.967/T`` (ICUB_FACTS.md 1a, iCub ctrlLib minJerkCtrl). Closed on an ideal plant 1/s
+``c = -15.967/T`` (icub-main ctrlLib minJerkCtrl.cpp). Closed on an ideal plant 1/s
 it gives the third-order approximation of a minimum-jerk point-to-point motion of duration T:
 90 % of a step at t = T, transient extinct for t >= 1.5 T. Because it acts on the *measured*
 error, a new target can be given at any time and the motion joins it smoothly (velocity and

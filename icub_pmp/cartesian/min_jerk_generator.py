@@ -3,7 +3,7 @@
 Two feedback min-jerk controllers (:class:`MinJerkFilter`, Pattacini et al. 2010) run
 concurrently: one in joint space toward the IK solution q_d, one in task space toward the hand
 pose x_d = K(q_d). They are kept coherent (x_dot = J q_dot) by the Lagrangian combination of
-iKin's MultiRefMinJerkCtrl (ICUB_FACTS.md 1a):
+iKin's MultiRefMinJerkCtrl (icub-main iKinInv.cpp):
 
     q_dot = q_dot_J + W J^T (I + J W J^T)^-1 (x_dot_task - J q_dot_J)
 

@@ -73,7 +73,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 # ---------------------------------------------------------------------- record
 def run_record(args: argparse.Namespace) -> int:
     """Record until Ctrl-C / SIGTERM / --duration; print per-topic counts."""
-    from icub_pmp.nodes.bag_recorder import format_result, record
+    from icub_pmp.ros.bag_recorder import format_result, record
 
     if not args.all and not args.topics:
         raise ValueError("name the topics to record, or use --all")
@@ -102,7 +102,7 @@ def run_record(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------- play
 def run_play(args: argparse.Namespace) -> int:
     """Replay the bag; print what was published."""
-    from icub_pmp.nodes.bag_player import play
+    from icub_pmp.ros.bag_player import play
 
     result = play(
         args.bag,

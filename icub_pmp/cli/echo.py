@@ -7,8 +7,9 @@ import sys
 
 import yaml
 
-from icub_pmp.cli.session import cli_node, matching_qos, spin_until, wait_for_topic_type
-from icub_pmp.nodes.msg_types import get_interface, message_to_dict
+from icub_pmp.cli.session import cli_node, spin_until, wait_for_topic_type
+from icub_pmp.ros.msg_types import get_interface, message_to_dict
+from icub_pmp.ros.qos import matching_qos
 
 __all__ = ["register", "run"]
 

@@ -7,8 +7,9 @@ import time
 
 import numpy as np
 
-from icub_pmp.cli.session import cli_node, matching_qos, spin_until, wait_for_topic_type
-from icub_pmp.nodes.msg_types import get_interface
+from icub_pmp.cli.session import cli_node, spin_until, wait_for_topic_type
+from icub_pmp.ros.msg_types import get_interface
+from icub_pmp.ros.qos import matching_qos
 
 __all__ = ["register", "run", "rate_statistics"]
 

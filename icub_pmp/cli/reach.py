@@ -23,13 +23,13 @@ from dataclasses import dataclass, field
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 
-__all__ = ["register", "run", "ReachArgs", "parse_reach_goal"]
+__all__ = ["register", "run", "ReachArgs", "parse_reach_args"]
 
 
 @dataclass(frozen=True)
 class ReachArgs:
-    """The parsed command line of ``icub reach``: per hand (x, y, z) [m] and optional
-    quaternion (w, x, y, z)."""
+    """The parsed `icub reach` arguments: per hand (x, y, z) [m] and optional quaternion
+    (w, x, y, z)."""
 
     positions: dict[str, tuple[float, float, float]]
     orientations: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
@@ -65,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def parse_reach_goal(
+def parse_reach_args(
     targets: list[str], frame: str = "root_link", use_torso: bool = False,
     tau: float = 0.0, simulate_only: bool = False,
 ) -> ReachArgs:
@@ -137,7 +137,7 @@ def build_action_goal(goal: ReachArgs, tolerance: float = 0.0):  # noqa: ANN201
 
 def run(args: argparse.Namespace) -> int:
     """Validate, send the goal, print the answer; exit 1 unless it succeeded."""
-    goal = parse_reach_goal(args.targets, args.frame, args.torso, args.tau, args.simulate)
+    goal = parse_reach_args(args.targets, args.frame, args.torso, args.tau, args.simulate)
     if not math.isfinite(args.tolerance) or args.tolerance < 0:
         raise InvalidInput(f"--tolerance must be a finite distance >= 0 m, got "
                            f"{args.tolerance}")

@@ -1,4 +1,4 @@
-"""A short-lived rclpy node for one CLI command, and QoS matching for echo/hz/record."""
+"""A short-lived rclpy node for one CLI command."""
 
 from __future__ import annotations
 
@@ -12,9 +12,8 @@ import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "matching_qos", "not_ready_reason"]
+__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "not_ready_reason"]
 
 
 @contextlib.contextmanager
@@ -74,23 +73,3 @@ def wait_for_topic_type(
 
     spin_until(executor, check, timeout)
     return found[0] if found else None
-
-
-def matching_qos(node: Node, topic: str, depth: int = 100) -> QoSProfile:
-    """A subscription QoS compatible with every current publisher of ``topic``.
-
-    Reliable only if all publishers are reliable; transient local only if all publishers are
-    (so latched topics such as /robot_description are received).
-    """
-    infos = node.get_publishers_info_by_topic(topic)
-    reliable = bool(infos) and all(
-        i.qos_profile.reliability == ReliabilityPolicy.RELIABLE for i in infos
-    )
-    latched = bool(infos) and all(
-        i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos
-    )
-    return QoSProfile(
-        depth=depth,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
-    )

@@ -1,4 +1,4 @@
-"""The demo scenario of the papers on the simulated iCub, driven over DDS (issue 8).
+"""The demo scenario of the papers on the simulated iCub, driven over DDS.
 
 Starts the node graph through its scripts (simulator in lockstep with the impedance
 controller, so the 1 kHz loop is exact in simulated time), records every topic to
@@ -30,9 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
+from icub_pmp.config import repo_root
+from icub_pmp.graph import NodeGraph, NodeProcess, reserve_domain_id, ros_environment
 from icub_pmp.kinematics import IcubModel
-from icub_pmp.nodes.conversions import time_to_sec
-from icub_pmp.testing import NodeGraph, NodeProcess, RosProbe, repo_root, reserve_domain_id
+from icub_pmp.ros.conversions import arrays_to_trajectory, time_to_sec
+from icub_pmp.ros.probe import RosProbe
 
 __all__ = ["PhaseResult", "DemoRunner", "main"]
 
@@ -152,8 +154,6 @@ class DemoRunner:
         """Move neck/eye joints to ``angles_deg`` through the controller (/joint_trajectory),
         as the iCub gaze controller would, and wait until the motion is done."""
         from trajectory_msgs.msg import JointTrajectory
-
-        from icub_pmp.nodes.conversions import arrays_to_trajectory
 
         js = self.latest["js"]
         now = dict(zip(js.name, js.position))
@@ -294,8 +294,6 @@ def run_demo(out_dir: Path, quick: bool = False) -> int:
     bag_dir = out_dir / "bag"
     results: list[PhaseResult] = []
     with reserve_domain_id() as domain:
-        from icub_pmp.testing import ros_environment
-
         env = ros_environment(domain)
         print(f"demo: ROS_DOMAIN_ID={domain}, output in {out_dir}", flush=True)
         params = {
@@ -429,8 +427,6 @@ def run_phases(runner: DemoRunner, quick: bool) -> list[PhaseResult]:
 
 def replay_check(bag_dir: Path, env: dict[str, str]) -> dict[str, object]:
     """Replay the bag (icub bag play) to a counting subscriber; compare with the bag's counts."""
-    from icub_pmp.testing import reserve_domain_id, ros_environment
-
     out: dict[str, object] = {"ok": False}
     if not (bag_dir / "metadata.yaml").exists():
         out["message"] = "no bag was written"

@@ -7,7 +7,8 @@ it; on the robot it is the differentiated encoder) through a 2nd-order Butterwor
 difference of the positions through the same filter. Acceleration = the backward difference of
 the *filtered* velocity over the sample interval, through a 2nd-order Butterworth at
 ``acceleration_cutoff_hz``. wholeBodyDynamics uses adaptive-window polynomial fits
-(ICUB_FACTS.md 1b); a Butterworth pair is cheaper at 1 kHz and its delay is known:
+(icub-main wholeBodyDynamics observerThread.cpp); a Butterworth pair is cheaper at 1 kHz and
+its delay is known:
 about 0.225 / fc [s] per stage.
 """
 

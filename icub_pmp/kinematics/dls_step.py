@@ -1,8 +1,8 @@
 """damped_least_squares_step: one iteration of damped-least-squares inverse kinematics.
 
-The step both DLS baselines take (``icub_pmp.pmp.DlsSolver``, the PMP paper's Sect. 1
-comparison, Nakamura & Hanafusa 1986 / Wampler 1986; ``icub_pmp.cartesian.DlsSolver``, the
-Cartesian paper's Sect. 4.1 comparison through Orocos KDL):
+The step of the DLS baseline (:class:`icub_pmp.baselines.DlsSolver`: the PMP paper's Sect. 1
+comparison, Nakamura & Hanafusa 1986 / Wampler 1986, and the reaching paper's Sect. 4.1
+comparison through Orocos KDL):
 
     dq = J^T (J J^T + mu^2 I)^-1 e,
 

@@ -1,7 +1,7 @@
 """EyeKinematics: the iCub eyes (tilt, version, vergence) and their cameras, pure numpy.
 
 The icub-models URDFs have no eyes. Their geometry comes from the iKin ``iCubEye`` DH table
-for iCub v2.x (``ICUB_FACTS.md`` section 2, from icub-main ``iKinFwd.cpp``): links 0-5 are
+for iCub v2.x (icub-main ``iKinFwd.cpp``, ``iCubEye``): links 0-5 are
 torso and neck, link 6 is the eye tilt ``(A=0, D=+-0.034 [right +, left -], alpha=-pi/2,
 offset=0)`` and link 7 the eye pan ``(0, 0, pi/2, -pi/2)``. The two eyes share the tilt axis
 and are 0.068 m apart (the stereo baseline).
@@ -105,7 +105,7 @@ class EyeAngles(NamedTuple):
 @dataclasses.dataclass(frozen=True)
 class CameraIntrinsics:
     """Pinhole intrinsics [px] of a ``width`` x ``height`` image (iCub simulator defaults:
-    320x240, 50 deg horizontal field of view, ICUB_FACTS.md section 0)."""
+    320x240, 50 deg horizontal field of view, icub-models iCubGazeboV2_5_visuomanip)."""
 
     width: int = 320
     height: int = 240

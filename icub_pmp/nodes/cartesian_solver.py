@@ -4,10 +4,10 @@ Services
 - ``/cartesian/solve_pose`` (icub_interfaces/srv/SolvePose): eq 11 solved by IPOPT
   (:class:`~icub_pmp.cartesian.IkSolver`); answers joints, residuals, solve time; moves nothing.
 - ``/cartesian/go_to_pose`` (icub_interfaces/srv/GoToPose): the same solve, then a
-  multi-referential minimum-jerk trajectory (:class:`~icub_pmp.cartesian.MinJerkGenerator`)
-  published on ``/joint_trajectory`` for the impedance controller. A goal given while a
+  multi-referential minimum-jerk trajectory published on ``/joint_trajectory`` for the
+  impedance controller (:class:`~icub_pmp.cartesian.CartesianController`: a goal given while a
   trajectory of the same chain runs starts from that trajectory's state at the current time,
-  so the motion bends smoothly toward the new target.
+  so the motion bends smoothly toward the new target).
 
 Action ``/cartesian/go_to_pose_action`` (icub_interfaces/action/GoToPose): the same plan,
 executed through the impedance controller's FollowJointTrajectory action, with feedback (the
@@ -17,73 +17,62 @@ answers "sent", never "reached". Trajectories faster than the joints' velocity/a
 limits (config/robot.yaml) are slowed down to them, and the answer says so.
 
 Subscribes ``/joint_states`` (start configuration). Parameters: the fields of
-:class:`IkConfig`, :class:`MinJerkConfig` and :class:`CartesianNodeConfig`
-(config/cartesian_solver.yaml), validated when set at run time. Bad requests answer
-``success=false`` with a message (and the residual when a solve ran); the node never dies on
-them, and IPOPT is bounded in iterations and wall time.
+:class:`IkConfig`, :class:`MinJerkConfig`, :class:`CartesianNodeConfig` and
+:class:`~icub_pmp.control.arrival_monitor.ArrivalConfig` (config/cartesian_solver.yaml),
+validated when set at run time. Bad requests answer ``success=false`` with a message (and the
+residual when a solve ran); the node never dies on them, and IPOPT is bounded in iterations
+and wall time.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any
 
 import numpy as np
 from geometry_msgs.msg import Point
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.time import Time
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.action import GoToPose as GoToPoseAction
 from icub_interfaces.srv import GoToPose, SolvePose
 from icub_pmp.cartesian import (
-    CartesianNodeConfig,
+    CartesianController,
     IkConfig,
     IkSolution,
     IkSolver,
     KinematicChain,
     MinJerkConfig,
-    MinJerkGenerator,
-    SampledTrajectory,
 )
 from icub_pmp.control.arrival_monitor import ArrivalConfig
-from icub_pmp.control.joint_trajectory import JointTrajectory as CoreTrajectory
-from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory_time
+from icub_pmp.control.trajectory_limits import JointRateLimits
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_model import IcubModel
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_pmp.nodes.conversions import (
+from icub_pmp.kinematics.rotations import quat_wxyz_to_matrix
+from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
+from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     joint_state_field,
     make_joint_state,
     point_to_array,
     pose_to_arrays,
-    quat_wxyz_to_matrix,
     validate_joint_state,
 )
-from icub_pmp.nodes.node_runner import run_node
-from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
 from icub_pmp.ros.goal_execution import GoalExecution
 from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
+from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["CartesianSolverNode", "main"]
 
-_CONFIGS = (IkConfig, MinJerkConfig, CartesianNodeConfig)
-
-
-@dataclasses.dataclass
-class _Active:
-    """The trajectory last published: start time, samples, chain, held configuration."""
-
-    start: Time
-    trajectory: SampledTrajectory
-    chain: str
-    q_hold: np.ndarray
+_CONFIGS = (IkConfig, MinJerkConfig, CartesianNodeConfig, ArrivalConfig)
 
 
 class CartesianSolverNode(Node):
@@ -91,26 +80,19 @@ class CartesianSolverNode(Node):
 
     def __init__(self) -> None:
         super().__init__("cartesian_solver")
-        for cls in _CONFIGS:
-            for f in dataclasses.fields(cls):
-                default = getattr(cls(), f.name)
-                value = list(default) if isinstance(default, tuple) else default
-                self.declare_parameter(f.name, value, ParameterDescriptor(description=cls.__name__))
-        try:
-            self.ik_config, self.mj_config, self.node_config = self._configs({})
-        except IcubPmpError as exc:
-            raise SystemExit(f"cartesian_solver: bad parameters: {exc}") from exc
+        self.params = ConfigParameters(self, _CONFIGS, check=_check_rest_posture,
+                                       on_change=self._on_config_change)
         self.model = IcubModel()
         self.solver = IkSolver(self.model, self.ik_config)
+        self.controller = CartesianController(self.solver, self.mj_config,
+                                              JointRateLimits.from_spec(self.model.spec))
         for chain in self.node_config.prebuild_chains:
             prob = self.solver.problem(chain)
             self.get_logger().info(
                 f"built the eq 11 NLP of {chain} ({prob.chain.n} DoF, "
                 f"{'compiled C' if prob.compiled else 'CasADi VM'})"
             )
-        self.add_on_set_parameters_callback(self._on_set_parameters)
         self.joint_cache = JointStateCache(self)
-        self._active: _Active | None = None
         self.traj_pub = self.create_publisher(
             JointTrajectory,
             "joint_trajectory",
@@ -118,7 +100,6 @@ class CartesianSolverNode(Node):
         )
         self.create_service(SolvePose, "cartesian/solve_pose", self._on_solve_pose)
         self.create_service(GoToPose, "cartesian/go_to_pose", self._on_go_to_pose)
-        self.rate_limits = JointRateLimits.from_spec(self.model.spec)
         self.execution = GoalExecution(self, self.joint_cache, self._hands,
                                        server_timeout=self.node_config.controller_timeout)
         self.go_action = ActionServer(
@@ -132,32 +113,24 @@ class CartesianSolverNode(Node):
         )
 
     # ------------------------------------------------------------------ parameters
-    def _configs(
-        self, changes: dict[str, Any]
-    ) -> tuple[IkConfig, MinJerkConfig, CartesianNodeConfig]:
-        params = {}
-        for cls in _CONFIGS:
-            for f in dataclasses.fields(cls):
-                params[f.name] = self.get_parameter(f.name).value
-        params.update(changes)
-        ik = IkConfig.from_dict(params, ignore_unknown=True)
-        mj = MinJerkConfig.from_dict(params, ignore_unknown=True)
-        nc = CartesianNodeConfig.from_dict(params, ignore_unknown=True)
-        RobotSpec.load().posture(ik.rest_posture)  # raises UnknownName for a bad posture
-        return ik, mj, nc
+    @property
+    def ik_config(self) -> IkConfig:
+        """The solver's configuration (eq 11, IPOPT)."""
+        return self.params.get(IkConfig)
 
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        names = {f.name for cls in _CONFIGS for f in dataclasses.fields(cls)}
-        changes = {p.name: p.value for p in params if p.name in names}
-        if not changes:
-            return SetParametersResult(successful=True)
-        try:
-            ik, mj, nc = self._configs(changes)
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        self.solver.reconfigure(ik)
-        self.ik_config, self.mj_config, self.node_config = ik, mj, nc
-        return SetParametersResult(successful=True)
+    @property
+    def mj_config(self) -> MinJerkConfig:
+        """The min-jerk trajectory configuration."""
+        return self.params.get(MinJerkConfig)
+
+    @property
+    def node_config(self) -> CartesianNodeConfig:
+        """The node's own parameters."""
+        return self.params.get(CartesianNodeConfig)
+
+    def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
+        self.solver.reconfigure(new[0])
+        self.controller.config = new[1]
 
     # ------------------------------------------------------------------ inputs
     @property
@@ -176,15 +149,15 @@ class CartesianSolverNode(Node):
 
     def _start_q(self, start_state: JointState) -> np.ndarray:
         """Full configuration (nq,) from the request's start_state or the latest joints."""
-        base = self.model.posture("rest")
-        if self._latest is not None:
-            base = self.model.q_from_dict(self._latest, default=base)
-        if len(start_state.name) > 0:
-            validate_joint_state(start_state)
-            return self.model.q_from_dict(joint_state_field(start_state), default=base)
-        if self._latest is None:
-            raise InvalidInput("no /joint_states received yet and the request has no start_state")
-        return base
+        return self.controller.start_configuration(self._latest, self._start_state(start_state))
+
+    @staticmethod
+    def _start_state(start_state: JointState) -> dict[str, float] | None:
+        """The request's start_state as {joint: angle} (None when empty), validated."""
+        if len(start_state.name) == 0:
+            return None
+        validate_joint_state(start_state)
+        return joint_state_field(start_state)
 
     def _target(self, req: Any) -> tuple[str, np.ndarray, np.ndarray | None]:
         chain = req.chain or self.node_config.default_chain
@@ -234,7 +207,7 @@ class CartesianSolverNode(Node):
         return resp
 
     def _go_to_pose(self, req: GoToPose.Request, resp: GoToPose.Response) -> None:
-        sol, msg, note = self._plan_go_to_pose(req, resp)
+        msg, note = self._plan_go_to_pose(req, resp, self._start_state(req.start_state))
         if msg is None:
             return
         wait = self.node_config.subscriber_timeout
@@ -245,55 +218,27 @@ class CartesianSolverNode(Node):
                         f"/cartesian/go_to_pose_action action reports the measured arrival)"
                         + listening)
 
-    def _plan_go_to_pose(self, req: Any, resp: Any = None
-                         ) -> tuple[IkSolution, JointTrajectory | None, str]:
-        """Solve eq 11 and roll out the minimum-jerk trajectory, within the joints' rate
-        limits: (solution, trajectory message or None when the solve failed, message).
-        ``req``: a GoToPose service request or action goal (which has no start_state)."""
-        start_state = getattr(req, "start_state", None) or JointState()
-        T = float(req.trajectory_time) or self.mj_config.trajectory_time
-        if not (math.isfinite(T) and T >= 10 * self.mj_config.period):
-            raise InvalidInput(
-                f"trajectory_time: expected 0 (default) or >= {10 * self.mj_config.period} s, "
-                f"got {req.trajectory_time}"
-            )
+    def _plan_go_to_pose(self, req: Any, resp: Any, start_state: dict[str, float] | None
+                         ) -> tuple[JointTrajectory | None, str]:
+        """Solve and roll out (:class:`CartesianController`), fill ``resp`` with the solution:
+        (the trajectory message, or None when the solve failed; the message)."""
+        self.controller.trajectory_time(req.trajectory_time)  # checked before the target
         chain, position, rotation = self._target(req)
         now = self.get_clock().now()
-        state = None
-        act = self._active
-        if act is not None and act.chain == chain and len(start_state.name) == 0:
-            elapsed = (now - act.start).nanoseconds * 1e-9
-            if 0.0 <= elapsed < act.trajectory.duration:
-                state = act.trajectory.state_at(elapsed)
-        if state is not None:
-            q_start = act.q_hold.copy()
-            q_start[self.model.indices(act.trajectory.joint_names)] = state.q
-        else:
-            q_start = self._start_q(start_state)
-        sol = self.solver.solve(chain, position, rotation, q_start)
-        if resp is not None:
-            self._fill(resp, sol)
-        if not sol.success:
-            return sol, None, sol.message
-        gen = MinJerkGenerator(self.model, self.solver.problem(chain).chain, self.mj_config, T)
-        gen.reset(q_start)
-        if state is not None:
-            gen.restore(state)
-        gen.set_target(sol.q)
-        traj = gen.rollout()
-        times, qd = np.asarray(traj.t), np.asarray(traj.qd)
-        rep = self.rate_limits.report(CoreTrajectory(traj.joint_names, times, traj.q, qd))
-        slowed = ""
-        if rep.time_scale > 1.0 + 1e-3:
-            scale = rep.time_scale * 1.01
-            times, qd, _ = scale_trajectory_time(times, qd, None, scale)
-            slowed = (f"; slowed down to the joint limits: {traj.duration:.2f} -> "
-                      f"{traj.duration * scale:.2f} s ({rep.describe()})")
-        msg = arrays_to_trajectory(traj.joint_names, times, traj.q, qd, stamp=now.to_msg())
-        self._active = _Active(now, traj, chain, q_start) if not slowed else None
-        note = (f"{sol.message}; trajectory of {len(times)} points over {times[-1]:.2f} s"
-                + (" (continued from the running one)" if state is not None else "") + slowed)
-        return sol, msg, note
+        motion = self.controller.go_to(
+            chain, position, rotation, now.nanoseconds * 1e-9,
+            trajectory_time=req.trajectory_time, measured=self._latest,
+            start_state=start_state)
+        self._fill(resp, motion.solution)
+        traj = motion.trajectory
+        if traj is None:
+            return None, motion.solution.message
+        msg = arrays_to_trajectory(traj.joint_names, traj.t, traj.q, traj.qd, stamp=now.to_msg())
+        note = (f"{motion.solution.message}; trajectory of {len(traj.t)} points over "
+                f"{traj.duration:.2f} s"
+                + (" (continued from the running one)" if motion.continued else "")
+                + (f"; {motion.slowdown}" if motion.slowdown else ""))
+        return msg, note
 
     # ------------------------------------------------------------------ the action
     def _hands(self, st: MeasuredState) -> dict[str, np.ndarray]:
@@ -340,22 +285,22 @@ class CartesianSolverNode(Node):
                                    f"(0 = default), got {tol}")
             chain, position, _ = self._target(req)
             hand = "left" if "left" in chain else "right"
-            sol, msg, note = self._plan_go_to_pose(req)
+            solved = GoToPose.Response()
+            msg, note = self._plan_go_to_pose(req, solved, None)
         except IcubPmpError as exc:
             return finish("rejected", str(exc))
         except Exception as exc:  # never die on a goal
             return finish("rejected", f"internal error: {type(exc).__name__}: {exc}")
-        res.solver_position_error = float(sol.position_error)
-        res.solver_orientation_error = float(sol.orientation_error)
+        res.solver_position_error = float(solved.position_error)
+        res.solver_orientation_error = float(solved.orientation_error)
         if msg is None:
             return finish("unreachable", f"{note}; not executed")
         res.trajectory = msg
         res.trajectory_time_used = float(msg.points[-1].time_from_start.sec
                                          + msg.points[-1].time_from_start.nanosec * 1e-9)
-        nc = self.node_config
-        arrival = ArrivalConfig(arrival_tolerance=tol or nc.arrival_tolerance,
-                                settle_speed=nc.settle_speed, settle_time=nc.settle_time,
-                                settle_timeout=nc.settle_timeout)
+        arrival = self.params.get(ArrivalConfig)
+        if tol > 0:
+            arrival = dataclasses.replace(arrival, arrival_tolerance=tol)
         msg.header.stamp.sec, msg.header.stamp.nanosec = 0, 0  # start when accepted
         out = await self.execution.run(
             msg, {hand: position}, arrival, feedback, lambda: handle.is_cancel_requested,
@@ -368,8 +313,17 @@ class CartesianSolverNode(Node):
         return finish(out.outcome, f"{out.message} (solver: {note})")
 
 
+def _check_rest_posture(configs: tuple) -> None:
+    """The rest posture of the IkConfig must be a posture of config/robot.yaml."""
+    RobotSpec.load().posture(configs[0].rest_posture)  # raises UnknownName
+
+
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp cartesian_solver``)."""
+    # IPOPT's linear solver (MUMPS) is built with OpenMP; on a 10-variable problem its thread
+    # pool costs more than it gives (about 20 % per solve). Read when the IPOPT plugin loads
+    # (the first NLP is built in the node's constructor); a value set by the user wins.
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
     run_node(CartesianSolverNode, args, "cartesian_solver")
 
 if __name__ == "__main__":

@@ -48,15 +48,15 @@ from icub_interfaces.srv import LookAt
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.gaze import GAZE_JOINTS, GazeController, GazeControllerConfig, GazeNodeConfig
 from icub_pmp.gaze.gaze_plan import GazePlan
-from icub_pmp.nodes.conversions import (
+from icub_pmp.nodes.joint_state_listener import JointStateListener
+from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     make_joint_state,
     point_to_array,
     sec_to_time,
 )
-from icub_pmp.nodes.joint_state_listener import JointStateListener
-from icub_pmp.nodes.node_runner import spin_node
-from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["GazeControllerNode", "main"]
 

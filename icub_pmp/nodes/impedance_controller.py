@@ -39,7 +39,6 @@ import time
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -48,17 +47,19 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.msg import ControllerStatus
+from icub_pmp.control.estimate_gate import EstimateGate
 from icub_pmp.control.impedance_controller import ImpedanceController
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
-from icub_pmp.nodes.conversions import (
+from icub_pmp.ros.conversions import (
     joint_state_arrays,
     time_to_sec,
     trajectory_extras,
     trajectory_to_arrays,
 )
-from icub_pmp.nodes.node_runner import spin_node
-from icub_pmp.nodes.raw_messages import (
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.raw_messages import (
     RawJointStateReader,
     RawJointStateWriter,
     read_joint_state,
@@ -77,20 +78,15 @@ class ImpedanceControllerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("impedance_controller")
-        defaults = ImpedanceControllerConfig()
-        for name, value in defaults.to_dict().items():
-            self.declare_parameter(name, value, ParameterDescriptor(
-                description=f"ImpedanceControllerConfig.{name} "
-                            "(see config/impedance_controller.yaml)"))
-        config = ImpedanceControllerConfig.from_dict(
-            {n: self.get_parameter(n).value for n in defaults.field_names()})
+        self.params = ConfigParameters(self, ImpedanceControllerConfig,
+                                       on_change=self._on_config_change)
+        config = self.params.config
         self.controller = ImpedanceController(config)
         self.names = list(self.controller.joint_names)
         self._js_names: list[str] | None = None
         self._js_idx: np.ndarray | None = None
         self._est_names: list[str] | None = None
-        self._est_ns = -1
-        self._pending: tuple[int, object, np.ndarray, np.ndarray] | None = None
+        self.gate: EstimateGate[tuple[float, np.ndarray, np.ndarray, Time]] = EstimateGate()
         self._latest: tuple[float, np.ndarray, np.ndarray] | None = None
         self._latest_new = False
         self._t_last: float | None = None
@@ -100,7 +96,6 @@ class ImpedanceControllerNode(Node):
         self._status_wall = 0.0
         self.steps = 0
         self.dropped = 0
-        self.add_on_set_parameters_callback(self._on_set_parameters)
 
         sd = qos_profile_sensor_data
         self.pub_effort = self.create_publisher(JointState, "/effort_command", sd)
@@ -129,7 +124,6 @@ class ImpedanceControllerNode(Node):
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         # wall-clock timer: a joint state waiting for its estimate is answered without it
         # after estimate_timeout of wall time (the simulator waits for us: sim time stands)
-        self._pending_since = 0.0
         self.create_timer(0.005, self._on_pending_timeout,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._timer = None
@@ -140,23 +134,13 @@ class ImpedanceControllerNode(Node):
             f"{'lockstep' if config.lockstep else f'timer at {config.rate_hz} Hz'}")
 
     # ------------------------------------------------------------------ parameters
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        changes = {p.name: p.value for p in params
-                   if p.name in ImpedanceControllerConfig.field_names()}
-        if not changes:
-            return SetParametersResult(successful=True)
-        try:
-            cfg = ImpedanceControllerConfig.from_dict(
-                {**self.controller.config.to_dict(), **changes})
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        old = self.controller.config
-        self.controller.set_config(cfg)
-        if (old.lockstep, old.rate_hz) != (cfg.lockstep, cfg.rate_hz):
-            self._apply_stepping(cfg)
-        if old.mode != cfg.mode:
-            self.get_logger().info(f"mode {old.mode} -> {cfg.mode}")
-        return SetParametersResult(successful=True)
+    def _on_config_change(self, old: ImpedanceControllerConfig, new: ImpedanceControllerConfig,
+                          changed: frozenset[str]) -> None:
+        self.controller.set_config(new)
+        if (old.lockstep, old.rate_hz) != (new.lockstep, new.rate_hz):
+            self._apply_stepping(new)
+        if old.mode != new.mode:
+            self.get_logger().info(f"mode {old.mode} -> {new.mode}")
 
     def _apply_stepping(self, cfg: ImpedanceControllerConfig) -> None:
         if self._timer is not None:
@@ -192,11 +176,12 @@ class ImpedanceControllerNode(Node):
             self._latest = (ns * 1e-9, q, v)
             self._latest_new = True
             return
-        if cfg.wait_for_estimate and cfg.torque_loop and self._est_ns < ns:
-            self._pending = (ns, stamp, q, v)
-            self._pending_since = time.monotonic()
-            return
-        self._step(ns * 1e-9, q, v, stamp)
+        sample = (ns * 1e-9, q, v, stamp)
+        if cfg.wait_for_estimate and cfg.torque_loop:
+            sample = self.gate.offer(ns, sample)
+            if sample is None:
+                return  # waits for its estimate
+        self._step(*sample)
 
     def _on_estimate(self, data: bytes) -> None:
         try:
@@ -209,11 +194,9 @@ class ImpedanceControllerNode(Node):
         except IcubPmpError as exc:
             self._warn(f"/estimated_joint_torques dropped: {exc}")
             return
-        self._est_ns = max(self._est_ns, ns)
-        p = self._pending
-        if p is not None and p[0] <= self._est_ns:
-            self._pending = None
-            self._step(p[0] * 1e-9, p[2], p[3], p[1])
+        sample = self.gate.estimate(ns)
+        if sample is not None:
+            self._step(*sample)
 
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         try:
@@ -303,13 +286,10 @@ class ImpedanceControllerNode(Node):
         self._step(t, q, v, self.get_clock().now().to_msg())
 
     def _on_pending_timeout(self) -> None:
-        p = self._pending
-        if p is None:
-            return
-        if time.monotonic() - self._pending_since > self.controller.config.estimate_timeout:
-            self._pending = None
+        sample = self.gate.expired(self.controller.config.estimate_timeout)
+        if sample is not None:
             self._warn("no estimate for the pending joint state: answered without it")
-            self._step(p[0] * 1e-9, p[2], p[3], p[1])
+            self._step(*sample)
 
     def _on_watchdog(self) -> None:
         now = self.get_clock().now().nanoseconds * 1e-9
@@ -358,7 +338,7 @@ class ImpedanceControllerNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp impedance_controller``)."""
-    spin_node(ImpedanceControllerNode, args)
+    spin_node(ImpedanceControllerNode, args, "impedance_controller")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ blocks its executor while it waits, so its own subscriptions stall. The listener
 1 kHz joint states on a separate helper node spun by an ``EventsExecutor`` on a background
 thread (about 6 % of a core at 1 kHz, measured under load, against about 26 % with the default
 single-threaded executor and 64 % with the multi-threaded one), read raw
-(:mod:`icub_pmp.nodes.raw_messages`), and keeps the latest sample. The helper node ignores the
+(:mod:`icub_pmp.ros.raw_messages`), and keeps the latest sample. The helper node ignores the
 process's ROS arguments (no parameter file, no ``use_sim_time`` and thus no 1 kHz ``/clock``
 subscription, no remapping): it only reads ``/joint_states``.
 """
@@ -24,7 +24,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 
 from icub_pmp.errors import IcubPmpError, InvalidInput
-from icub_pmp.nodes.raw_messages import RawJointStateReader, read_joint_state
+from icub_pmp.ros.raw_messages import RawJointStateReader, read_joint_state
 
 __all__ = ["JointStateListener", "JointSample"]
 

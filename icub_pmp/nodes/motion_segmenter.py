@@ -1,6 +1,6 @@
 """motion_segmenter: independent-motion blobs from the eye cameras (motionCUT), a 3-D target.
 
-A thin adapter over :mod:`icub_pmp.vision` (issue 7; INTERFACES.md):
+A thin adapter over :mod:`icub_pmp.vision`:
 
 subscribes  /cam/left/image_raw, /cam/right/image_raw (sensor_msgs/Image rgb8/bgr8/mono8 of
             ``image_width`` x ``image_height``; others are dropped with a throttled warning),
@@ -18,11 +18,7 @@ Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig`
 
 from __future__ import annotations
 
-import dataclasses
-import re
-
 from geometry_msgs.msg import PointStamped
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
@@ -31,14 +27,15 @@ from icub_interfaces.msg import MotionBlob as MotionBlobMsg
 from icub_interfaces.msg import MotionBlobs as MotionBlobsMsg
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
-from icub_pmp.nodes.conversions import (
+from icub_pmp.ros.conversions import (
     array_to_image,
     image_to_array,
     joint_state_field,
     time_to_sec,
     validate_joint_state,
 )
-from icub_pmp.nodes.node_runner import run_node
+from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.vision import (
     MotionBlobs,
     MotionSegmenter,
@@ -53,15 +50,6 @@ __all__ = ["MotionSegmenterNode", "main", "blobs_to_msg"]
 
 SIDES = ("left", "right")
 ROOT_FRAME = "root_link"
-
-
-def _descriptions() -> dict[str, str]:
-    """Parameter descriptions from the Attributes section of MotionSegmenterConfig."""
-    doc = MotionSegmenterConfig.__doc__ or ""
-    out: dict[str, str] = {}
-    for m in re.finditer(r"^\s{8}(\w+): (.+?)(?=^\s{8}\w+: |\Z)", doc, re.M | re.S):
-        out[m.group(1)] = " ".join(m.group(2).split())
-    return out
 
 
 def blobs_to_msg(blobs: MotionBlobs, header, width: int, height: int) -> MotionBlobsMsg:
@@ -90,21 +78,9 @@ class MotionSegmenterNode(Node):
 
     def __init__(self) -> None:
         super().__init__("motion_segmenter")
-        desc = _descriptions()
-        for f in dataclasses.fields(MotionSegmenterConfig):
-            default = getattr(MotionSegmenterConfig(), f.name)
-            self.declare_parameter(
-                f.name, default, ParameterDescriptor(description=desc.get(f.name, ""))
-            )
-        params = {f.name: self.get_parameter(f.name).value
-                  for f in dataclasses.fields(MotionSegmenterConfig)}
-        try:
-            config = MotionSegmenterConfig.from_dict(params)
-        except IcubPmpError as exc:
-            raise SystemExit(f"motion_segmenter: bad parameters: {exc}") from exc
-        self._apply(config)
-        self.add_on_set_parameters_callback(self._on_set)
-        self.add_post_set_parameters_callback(self._post_set)
+        self.params = ConfigParameters(self, MotionSegmenterConfig,
+                                       on_change=self._on_config_change)
+        self._reset(self.config)
 
         self.cameras = HeadCameras()
         self._joints: dict[str, float] = {}
@@ -137,8 +113,13 @@ class MotionSegmenterNode(Node):
         )
 
     # ------------------------------------------------------------------ parameters
-    def _apply(self, config: MotionSegmenterConfig) -> None:
-        self.config = config
+    @property
+    def config(self) -> MotionSegmenterConfig:
+        """The current configuration (``config/motion_segmenter.yaml``, run-time changes)."""
+        return self.params.config
+
+    def _reset(self, config: MotionSegmenterConfig) -> None:
+        """Fresh segmenters, trackers and default intrinsics for ``config``."""
         self.segmenters = {s: MotionSegmenter(config) for s in SIDES}
         self.trackers = {s: TargetTracker(config) for s in SIDES}
         cam = CameraIntrinsics(width=config.image_width, height=config.image_height,
@@ -147,22 +128,10 @@ class MotionSegmenterNode(Node):
         self._latest: dict[str, tuple[float, TrackedTarget] | None] = {s: None for s in SIDES}
         self._paired_stamp: float | None = None
 
-    def _candidate(self, params: list) -> MotionSegmenterConfig:
-        values = self.config.to_dict()
-        values.update({p.name: p.value for p in params if p.name in values})
-        return MotionSegmenterConfig.from_dict(values)
-
-    def _on_set(self, params: list) -> SetParametersResult:
-        try:
-            self._candidate(params)
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        return SetParametersResult(successful=True)
-
-    def _post_set(self, params: list) -> None:
-        config = self._candidate(params)
-        if config != self.config:
-            self._apply(config)
+    def _on_config_change(self, old: MotionSegmenterConfig, new: MotionSegmenterConfig,
+                          changed: frozenset[str]) -> None:
+        if new != old:
+            self._reset(new)
             self.get_logger().info("parameters changed: segmenters reset")
 
     # ------------------------------------------------------------------ callbacks

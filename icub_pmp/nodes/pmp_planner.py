@@ -28,7 +28,9 @@ root_link).
 Target frames: empty or ``root_link``, or any frame of the iCub model (the target is then
 expressed in that frame at the start posture). Bad goals (NaN, unknown hand or frame, tau < 0,
 no hand, a zero quaternion) answer success=false with a message; the node never dies on a
-request. Parameters: config/pmp_planner.yaml (= :class:`icub_pmp.pmp.PmpConfig` + the node's).
+request. Parameters: config/pmp_planner.yaml (= :class:`icub_pmp.pmp.PmpConfig` +
+:class:`icub_pmp.ros.pmp_node_config.PmpNodeConfig` + :class:`icub_pmp.control.arrival_monitor.
+ArrivalConfig`).
 """
 
 from __future__ import annotations
@@ -37,8 +39,8 @@ import math
 import time
 
 import numpy as np
+from geometry_msgs.msg import Point
 from nav_msgs.msg import Path
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -50,60 +52,33 @@ from icub_interfaces.srv import Reach
 from icub_pmp.control.arrival_monitor import ArrivalConfig
 from icub_pmp.control.joint_trajectory import JointTrajectory as CoreTrajectory
 from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory_time
-from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
-from icub_pmp.nodes.conversions import (
+from icub_pmp.kinematics.rotations import quat_wxyz_to_matrix
+from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
+from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     joint_state_field,
     pose_to_arrays,
     positions_to_path,
-    quat_wxyz_to_matrix,
     validate_joint_state,
 )
-from icub_pmp.nodes.node_runner import run_node
-from icub_pmp.nodes.subscriber_wait import subscriber_note, wait_for_subscribers
-from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
 from icub_pmp.ros.goal_execution import GoalExecution
 from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
+from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.pmp_node_config import PmpNodeConfig
+from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["PmpPlannerNode", "main"]
-
-#: parameters of the node itself (beyond PmpConfig): name -> (default, description)
-NODE_PARAMETERS = {
-    "plan_from_rest_without_state": (
-        True, "no /joint_states yet and no start_state: plan from 'rest' (not executed)"),
-    "joint_state_timeout": (0.0, "[s] older /joint_states count as missing (0 = any age)"),
-    "warm_up": (True, "build the bimanual+torso posture memory before serving"),
-    "subscriber_timeout": (
-        1.0, "[s, wall] wait up to this long for a subscriber on /joint_trajectory before "
-             "publishing a plan (discovery right after start-up)"),
-    "controller_timeout": (
-        5.0, "[s, wall] reach action: wait this long for the controller's action server"),
-    "arrival_tolerance": (0.01, "[m] reach action: measured hand error of a reached goal"),
-    "settle_speed": (0.005, "[m/s] reach action: a hand slower than this is still"),
-    "settle_time": (0.2, "[s] reach action: hands still this long after the end = settled"),
-    "settle_timeout": (2.0, "[s] reach action: judge anyway this long after the end"),
-}
-
 
 class PmpPlannerNode(Node):
     """Serves /pmp/reach with a :class:`~icub_pmp.pmp.PmpPlanner`."""
 
     def __init__(self) -> None:
         super().__init__("pmp_planner")
-        defaults = PmpConfig().to_dict()
-        for name, value in defaults.items():
-            self.declare_parameter(name, value, ParameterDescriptor(
-                description=f"PmpConfig.{name} (see config/pmp_planner.yaml)"))
-        for name, (value, text) in NODE_PARAMETERS.items():
-            self.declare_parameter(name, value, ParameterDescriptor(description=text))
-        try:
-            self.config = PmpConfig.from_dict(
-                {n: self.get_parameter(n).value for n in defaults})
-        except ConfigError as exc:
-            raise SystemExit(f"pmp_planner: bad parameters: {exc}") from exc
-        self._check_node_parameters({n: self.get_parameter(n).value for n in NODE_PARAMETERS})
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.params = ConfigParameters(self, (PmpConfig, PmpNodeConfig, ArrivalConfig),
+                                       on_change=self._on_config_change)
         self.planner = PmpPlanner(self.config)
         self._names = self.planner.provider.joint_names
         self._valid_state_names = set(self.planner.spec.actuated_joints)
@@ -115,7 +90,7 @@ class PmpPlannerNode(Node):
             h: self.create_publisher(Path, f"/pmp/predicted_path/{h}_hand", reliable)
             for h in HANDS
         }
-        if self.get_parameter("warm_up").value:
+        if self.node_config.warm_up:
             t0 = time.perf_counter()
             self.planner.warm_up()
             self.get_logger().info(
@@ -132,9 +107,8 @@ class PmpPlannerNode(Node):
             q = icub.q_from_dict(st.positions)
             return {h: icub.frame_position(q, f) for h, f in frames.items()}
 
-        self.execution = GoalExecution(
-            self, self.joint_states, hands,
-            server_timeout=float(self.get_parameter("controller_timeout").value))
+        self.execution = GoalExecution(self, self.joint_states, hands,
+                                       server_timeout=self.node_config.controller_timeout)
         self.reach_action = ActionServer(
             self, ReachAction, "/pmp/reach_action", execute_callback=self._execute_reach,
             goal_callback=lambda _goal: GoalResponse.ACCEPT,
@@ -142,35 +116,23 @@ class PmpPlannerNode(Node):
         self.get_logger().info("serving /pmp/reach (service) and /pmp/reach_action (action)")
 
     # ------------------------------------------------------------------ parameters
-    @staticmethod
-    def _check_node_parameters(values: dict) -> None:
-        for name in ("joint_state_timeout", "subscriber_timeout", "controller_timeout"):
-            t = values.get(name, 0.0)
-            if not isinstance(t, float) or not math.isfinite(t) or t < 0:
-                raise ConfigError(f"{name}: expected a float >= 0 s, got {t!r}")
-        ArrivalConfig.from_dict(values, ignore_unknown=True)
+    @property
+    def config(self) -> PmpConfig:
+        """The planner's configuration."""
+        return self.params.get(PmpConfig)
 
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        current = {n: self.get_parameter(n).value for n in PmpConfig.field_names()}
-        node_values = {n: self.get_parameter(n).value for n in NODE_PARAMETERS}
-        for p in params:
-            if p.name in current:
-                current[p.name] = p.value
-            elif p.name in node_values:
-                node_values[p.name] = p.value
-        try:
-            config = PmpConfig.from_dict(current)
-            self._check_node_parameters(node_values)
-        except ConfigError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        if config != self.config:
-            self.config = config
-            self.planner = PmpPlanner(config, provider=self.planner.provider)
-        return SetParametersResult(successful=True)
+    @property
+    def node_config(self) -> PmpNodeConfig:
+        """The node's own parameters."""
+        return self.params.get(PmpNodeConfig)
+
+    def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
+        if new[0] != old[0]:
+            self.planner = PmpPlanner(new[0], provider=self.planner.provider)
 
     # ------------------------------------------------------------------ joint states
     def _current_state(self) -> dict[str, float] | None:
-        timeout = float(self.get_parameter("joint_state_timeout").value)
+        timeout = self.node_config.joint_state_timeout
         st = self.joint_states.latest()
         if st is None:
             return None
@@ -221,7 +183,7 @@ class PmpPlannerNode(Node):
         execute = plan.success and not req.simulate_only and not assumed
         listening = ""
         if execute:
-            wait = float(self.get_parameter("subscriber_timeout").value)
+            wait = self.node_config.subscriber_timeout
             listening = subscriber_note(wait_for_subscribers(self.trajectory_pub, wait), wait)
             self.trajectory_pub.publish(res.trajectory)
         stamp = self.get_clock().now().to_msg()
@@ -253,7 +215,7 @@ class PmpPlannerNode(Node):
             return start, False, note
         if current is not None:
             return dict(current), False, ""
-        if not self.get_parameter("plan_from_rest_without_state").value:
+        if not self.node_config.plan_from_rest_without_state:
             raise InvalidInput("no /joint_states received yet and no start_state given")
         return (dict(self.planner.spec.posture("rest")), True,
                 " (no /joint_states received: planned from the rest posture)")
@@ -291,7 +253,6 @@ class PmpPlannerNode(Node):
                 orientations[h] = rot
         return ReachGoal(targets=targets, orientations=orientations, use_torso=req.use_torso,
                          tau=req.tau if req.tau > 0 else None)
-
 
     # ------------------------------------------------------------------ the action
     async def _execute_reach(self, handle) -> ReachAction.Result:
@@ -337,8 +298,7 @@ class PmpPlannerNode(Node):
             if not math.isfinite(tol) or tol < 0:
                 raise InvalidInput(f"arrival_tolerance: expected a finite distance >= 0 m "
                                    f"(0 = default), got {tol}")
-            arrival = ArrivalConfig.from_dict(
-                {n: float(self.get_parameter(n).value) for n in ArrivalConfig.field_names()})
+            arrival = self.params.get(ArrivalConfig)
             if tol > 0:
                 arrival = ArrivalConfig.from_dict({**arrival.to_dict(),
                                                    "arrival_tolerance": tol})
@@ -368,9 +328,7 @@ class PmpPlannerNode(Node):
                       + f"{slowed})")
 
 
-def _point(p: np.ndarray):
-    from geometry_msgs.msg import Point
-
+def _point(p: np.ndarray) -> Point:
     return Point(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 

@@ -2,19 +2,21 @@
 
 The equivalent of ROS's joint_state_publisher for this robot: a source of /joint_states for
 visualisation and for testing consumers without the simulator. Parameters: ``posture``
-(a name from config/robot.yaml), ``rate_hz``, ``topic``. The posture can be changed at run
-time (``posture`` parameter, validated).
+(a name from config/robot.yaml), ``rate_hz``, ``topic``
+(:class:`~icub_pmp.ros.posture_publisher_config.PosturePublisherConfig`). The posture and the
+rate can be changed at run time (validated).
 """
 
 from __future__ import annotations
 
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_pmp.nodes.conversions import make_joint_state
-from icub_pmp.nodes.node_runner import run_node
+from icub_pmp.ros.conversions import make_joint_state
+from icub_pmp.ros.node_runner import run_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.posture_publisher_config import PosturePublisherConfig
 
 __all__ = ["PosturePublisher", "main"]
 
@@ -25,38 +27,23 @@ class PosturePublisher(Node):
     def __init__(self) -> None:
         super().__init__("posture_publisher")
         self.spec = RobotSpec.load()
-        self.declare_parameter(
-            "posture", "rest", ParameterDescriptor(description="named posture of robot.yaml")
-        )
-        self.declare_parameter("rate_hz", 100.0, ParameterDescriptor(description="[Hz]"))
-        self.declare_parameter("topic", "joint_states", ParameterDescriptor(read_only=True))
-        self.add_on_set_parameters_callback(self._on_set)
-        self._posture = self.spec.posture(self.get_parameter("posture").value)
-        rate = float(self.get_parameter("rate_hz").value)
-        if not rate > 0:
-            raise SystemExit(f"posture_publisher: rate_hz must be > 0, got {rate}")
-        self.pub = self.create_publisher(JointState, self.get_parameter("topic").value, 10)
-        self.timer = self.create_timer(1.0 / rate, self._tick)
+        self.params = ConfigParameters(
+            self, PosturePublisherConfig, read_only=("topic",),
+            check=lambda c: self.spec.posture(c.posture), on_change=self._on_change)
+        cfg = self.params.config
+        self._posture = self.spec.posture(cfg.posture)
+        self.pub = self.create_publisher(JointState, cfg.topic, 10)
+        self.timer = self.create_timer(1.0 / cfg.rate_hz, self._tick)
         self.get_logger().info(
-            f"publishing posture '{self.get_parameter('posture').value}' at {rate} Hz "
-            f"on {self.pub.topic_name}"
+            f"publishing posture '{cfg.posture}' at {cfg.rate_hz} Hz on {self.pub.topic_name}"
         )
 
-    def _on_set(self, params: list) -> SetParametersResult:
-        for p in params:
-            if p.name == "posture":
-                if p.value not in self.spec.postures:
-                    return SetParametersResult(
-                        successful=False,
-                        reason=f"unknown posture {p.value!r}; valid: {sorted(self.spec.postures)}",
-                    )
-                self._posture = self.spec.posture(p.value)
-            elif p.name == "rate_hz" and not (isinstance(p.value, float) and p.value > 0):
-                return SetParametersResult(successful=False, reason="rate_hz must be > 0.0")
-            elif p.name == "rate_hz":
-                self.timer.cancel()
-                self.timer = self.create_timer(1.0 / p.value, self._tick)
-        return SetParametersResult(successful=True)
+    def _on_change(self, old: PosturePublisherConfig, new: PosturePublisherConfig,
+                   changed: frozenset[str]) -> None:
+        self._posture = self.spec.posture(new.posture)
+        if new.rate_hz != old.rate_hz:
+            self.timer.cancel()
+            self.timer = self.create_timer(1.0 / new.rate_hz, self._tick)
 
     def _tick(self) -> None:
         names = list(self._posture)

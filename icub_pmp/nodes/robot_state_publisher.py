@@ -18,7 +18,6 @@ from __future__ import annotations
 import time
 
 from geometry_msgs.msg import TransformStamped
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
@@ -28,9 +27,10 @@ from tf2_msgs.msg import TFMessage
 
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.link_transforms import LinkTransform, LinkTransforms
-from icub_pmp.kinematics.robot_state_publisher_config import RobotStatePublisherConfig
-from icub_pmp.nodes.conversions import joint_state_field, validate_joint_state
-from icub_pmp.nodes.node_runner import spin_node
+from icub_pmp.ros.conversions import joint_state_field, validate_joint_state
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.robot_state_publisher_config import RobotStatePublisherConfig
 
 __all__ = ["RobotStatePublisher", "main", "LATCHED_QOS", "TF_QOS"]
 
@@ -56,15 +56,7 @@ class RobotStatePublisher(Node):
 
     def __init__(self) -> None:
         super().__init__("robot_state_publisher")
-        defaults = RobotStatePublisherConfig()
-        self.declare_parameter("publish_frequency", defaults.publish_frequency,
-                               ParameterDescriptor(description="highest /tf rate [Hz]"))
-        self.declare_parameter("mesh_uris", defaults.mesh_uris, ParameterDescriptor(
-            description="file | package: form of the mesh URIs in the URDF", read_only=True))
-        self.config = RobotStatePublisherConfig.from_dict(
-            {n: self.get_parameter(n).value for n in RobotStatePublisherConfig.field_names()}
-        )
-        self.add_on_set_parameters_callback(self._on_set)
+        self.params = ConfigParameters(self, RobotStatePublisherConfig, read_only=("mesh_uris",))
         self.links = LinkTransforms()
         self._q = self.links.model.posture("zero")
         self._next_tf = 0.0  # monotonic time [s] from which the next /tf is due
@@ -88,16 +80,10 @@ class RobotStatePublisher(Node):
             f"transforms (/tf at most {self.config.publish_frequency} Hz)"
         )
 
-    def _on_set(self, params: list) -> SetParametersResult:
-        changes = {p.name: p.value for p in params
-                   if p.name in RobotStatePublisherConfig.field_names()}
-        if not changes:
-            return SetParametersResult(successful=True)
-        try:
-            self.config = RobotStatePublisherConfig.from_dict({**self.config.to_dict(), **changes})
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        return SetParametersResult(successful=True)
+    @property
+    def config(self) -> RobotStatePublisherConfig:
+        """The current configuration (``config/robot_state_publisher.yaml``)."""
+        return self.params.config
 
     def _on_joint_states(self, data: bytes) -> None:
         now = time.monotonic()
@@ -125,7 +111,7 @@ class RobotStatePublisher(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp robot_state_publisher``)."""
-    spin_node(RobotStatePublisher, args)
+    spin_node(RobotStatePublisher, args, "robot_state_publisher")
 
 if __name__ == "__main__":
     main()

@@ -32,27 +32,24 @@ from __future__ import annotations
 import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Bool
 
+from icub_pmp.dynamics.stamp_synchroniser import StampSynchroniser
 from icub_pmp.dynamics.wrench_estimator import WrenchEstimator
 from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.kinematics.robot_spec import HANDS
-from icub_pmp.nodes.conversions import (
-    joint_state_arrays,
-    raw_header_stamp_ns,
-    set_wrench,
-    wrench_to_array,
-)
-from icub_pmp.nodes.node_runner import spin_node
-from icub_pmp.nodes.raw_messages import (
+from icub_pmp.ros.conversions import joint_state_arrays, set_wrench, wrench_to_array
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.raw_messages import (
     RawJointStateReader,
     RawJointStateWriter,
+    raw_header_stamp_ns,
     raw_wrench_stamped,
 )
 
@@ -63,6 +60,7 @@ _LIVE = {"rfrr_enabled", "rfrr_learning", "contact_force_on", "contact_force_off
          "contact_min_samples", "require_same_stamp", "stale_timeout", "publish_every"}
 _FT_TOPIC = {"left": "l_arm_ft", "right": "r_arm_ft"}
 _BUFFER = 64  # samples kept while waiting for the matching messages
+_FT_KEY = {h: f"/ft/{t}" for h, t in _FT_TOPIC.items()}  # the synchroniser's stream names
 
 
 class WrenchEstimatorNode(Node):
@@ -70,25 +68,19 @@ class WrenchEstimatorNode(Node):
 
     def __init__(self) -> None:
         super().__init__("wrench_estimator")
-        defaults = WrenchEstimatorConfig()
-        for name, value in defaults.to_dict().items():
-            self.declare_parameter(name, value, ParameterDescriptor(
-                description=f"WrenchEstimatorConfig.{name} (see config/wrench_estimator.yaml)"))
-        self.config = WrenchEstimatorConfig.from_dict(
-            {n: self.get_parameter(n).value for n in defaults.field_names()})
+        self.params = ConfigParameters(self, WrenchEstimatorConfig,
+                                       on_change=self._on_config_change)
         self.estimator = WrenchEstimator(self.config)
         self.names = list(self.estimator.joint_names)
         self._cached_names: list[str] | None = None
         self._js_reader = RawJointStateReader()  # joint states read from their bytes
         self._idx: np.ndarray | None = None
-        self._js: dict[int, JointState] = {}
-        self._ft: dict[str, dict[int, np.ndarray]] = {h: {} for h in HANDS}
+        self.sync: StampSynchroniser[bytes] = StampSynchroniser(
+            [_FT_KEY[h] for h in HANDS], _BUFFER)
         self._imu: np.ndarray | None = None
-        self._last_ns = -1
         self._seen = 0
         self.samples = 0
         self.dropped = 0
-        self.add_on_set_parameters_callback(self._on_set_parameters)
 
         sd = qos_profile_sensor_data
         self.pub_tau = self.create_publisher(JointState, "/estimated_joint_torques", sd)
@@ -121,7 +113,7 @@ class WrenchEstimatorNode(Node):
             self.create_subscription(WrenchStamped, f"/ft/{_FT_TOPIC[h]}",
                                      lambda m, h=h: self._on_ft(h, m), sd, raw=True)
         self._imu_sub = None
-        self._update_imu_subscription()
+        self._update_imu_subscription(self.config)
         self.get_logger().info(
             f"wrench_estimator: {len(self.names)} joints, FT convention "
             f"{self.config.ft_convention}, gravity from {self.config.gravity_source}, "
@@ -130,27 +122,23 @@ class WrenchEstimatorNode(Node):
             f"{'on' if self.config.require_same_stamp else 'off'}")
 
     # ------------------------------------------------------------------ parameters
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        changes = {p.name: p.value for p in params
-                   if p.name in WrenchEstimatorConfig.field_names()}
-        if not changes:
-            return SetParametersResult(successful=True)
-        try:
-            cfg = WrenchEstimatorConfig.from_dict({**self.config.to_dict(), **changes})
-            if set(changes) <= _LIVE:
-                self.estimator.apply_live_config(cfg)
-            else:
-                self.estimator = WrenchEstimator(cfg)
-                self.get_logger().info(f"estimator rebuilt for {sorted(changes)}")
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        self.config = cfg
-        self._update_imu_subscription()
-        return SetParametersResult(successful=True)
+    @property
+    def config(self) -> WrenchEstimatorConfig:
+        """The current configuration (``config/wrench_estimator.yaml``, run-time changes)."""
+        return self.params.config
 
-    def _update_imu_subscription(self) -> None:
+    def _on_config_change(self, old: WrenchEstimatorConfig, new: WrenchEstimatorConfig,
+                          changed: frozenset[str]) -> None:
+        if changed <= _LIVE:
+            self.estimator.apply_live_config(new)
+        else:
+            self.estimator = WrenchEstimator(new)
+            self.get_logger().info(f"estimator rebuilt for {sorted(changed)}")
+        self._update_imu_subscription(new)
+
+    def _update_imu_subscription(self, config: WrenchEstimatorConfig) -> None:
         """Subscribe to /imu only while the gravity comes from it (saves the 1 kHz traffic)."""
-        want = self.config.gravity_source == "imu"
+        want = config.gravity_source == "imu"
         if want and self._imu_sub is None:
             self._imu_sub = self.create_subscription(Imu, "/imu", self._on_imu,
                                                      qos_profile_sensor_data)
@@ -172,14 +160,11 @@ class WrenchEstimatorNode(Node):
             return None
 
     def _on_ft(self, hand: str, data: bytes) -> None:
-        ns = self._stamp(data, f"/ft/{_FT_TOPIC[hand]}")
+        ns = self._stamp(data, _FT_KEY[hand])
         if ns is None:
             return
-        buf = self._ft[hand]
-        buf[ns] = data
-        if len(buf) > _BUFFER:
-            del buf[min(buf)]
-        if self.config.require_same_stamp and ns in self._js:
+        self.sync.add(_FT_KEY[hand], ns, data)
+        if self.config.require_same_stamp and self.sync.has_primary(ns):
             self._try(ns)
 
     def _on_imu(self, msg: Imu) -> None:
@@ -193,37 +178,21 @@ class WrenchEstimatorNode(Node):
         if ns is None:
             return
         if self.config.require_same_stamp:
-            self._js[ns] = data
-            if len(self._js) > _BUFFER:
-                del self._js[min(self._js)]
+            self.sync.add_primary(ns, data)
             self._try(ns)
-        else:
-            ft = {}
-            for h in HANDS:
-                buf = self._ft[h]
-                if not buf:
-                    self._warn("no FT wrench received yet: joint state skipped")
-                    return
-                last = max(buf)
-                if (ns - last) * 1e-9 > self.config.stale_timeout:
-                    self._warn(f"/ft/{_FT_TOPIC[h]} is stale ({(ns - last) * 1e-9:.3f} s "
-                               "older than the joint states): sample skipped")
-                    return
-                ft[h] = buf[last]
-            self._process(ns, data, ft)
+            return
+        try:
+            ft = self.sync.latest(ns, self.config.stale_timeout)
+        except InvalidInput as exc:
+            self._warn(f"joint state at t = {ns * 1e-9:.3f} s skipped: {exc}")
+            return
+        self._process(ns, data, {h: ft[_FT_KEY[h]] for h in HANDS})
 
     def _try(self, ns: int) -> None:
         """Process stamp ``ns`` if the joint state and both FT wrenches are there."""
-        if ns not in self._js or any(ns not in self._ft[h] for h in HANDS):
-            return
-        msg = self._js.pop(ns)
-        ft = {h: self._ft[h].pop(ns) for h in HANDS}
-        for old in [k for k in self._js if k < ns]:  # never go back in time
-            del self._js[old]
-        for h in HANDS:
-            for old in [k for k in self._ft[h] if k < ns]:
-                del self._ft[h][old]
-        self._process(ns, msg, ft)
+        sample = self.sync.match(ns)
+        if sample is not None:
+            self._process(ns, sample.primary, {h: sample.secondary[_FT_KEY[h]] for h in HANDS})
 
     # ------------------------------------------------------------------ processing
     @staticmethod
@@ -237,11 +206,10 @@ class WrenchEstimatorNode(Node):
 
     def _process(self, ns: int, js_data: bytes, ft_data: dict[str, bytes]) -> None:
         """Deserialise and process one synchronised sample (one in ``sample_every``)."""
-        if ns <= self._last_ns:
+        if not self.sync.release(ns):  # processed already, or older than the last sample
             return
         self._seen += 1
         if (self._seen - 1) % self.config.sample_every:
-            self._last_ns = ns
             return
         try:
             try:  # the numbers straight from the bytes (raw_messages), else deserialise
@@ -271,7 +239,6 @@ class WrenchEstimatorNode(Node):
             self._cached_names = None
             self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
             return
-        self._last_ns = ns
         self.samples += 1
         # serialised directly (raw_messages): the names are encoded once
         self.pub_tau.publish(self._tau_writer.write(ns, effort=est.tau))
@@ -299,7 +266,7 @@ class WrenchEstimatorNode(Node):
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp wrench_estimator``)."""
-    spin_node(WrenchEstimatorNode, args)
+    spin_node(WrenchEstimatorNode, args, "wrench_estimator")
 
 
 if __name__ == "__main__":

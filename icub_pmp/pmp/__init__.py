@@ -1,8 +1,7 @@
 """The Passive Motion Paradigm (Mohan, Morasso, Metta, Sandini 2009): fields, branching
 networks, terminal-attractor timing and the planner facade. No ROS imports."""
 
-from icub_pmp.pmp.branching_network import BranchNetwork
-from icub_pmp.pmp.dls_baseline import DlsResult, DlsSolver
+from icub_pmp.pmp.branch_network import BranchNetwork
 from icub_pmp.pmp.force_field import ForceField
 from icub_pmp.pmp.held_object import HeldObject
 from icub_pmp.pmp.jacobian_provider import FrameKinematics, JacobianProvider
@@ -23,8 +22,6 @@ from icub_pmp.pmp.torque_limit_field import TorqueLimitField
 
 __all__ = [
     "BranchNetwork",
-    "DlsResult",
-    "DlsSolver",
     "ForceField",
     "FrameKinematics",
     "HeldObject",

@@ -3,7 +3,8 @@
 Gains are "virtual" (Mohan et al. 2009: K_ext a virtual stiffness, A_int a virtual admittance):
 only their ratios shape the plan, because the relaxation rate is normalised per plan (the
 initial rate of Appendix A is set to 1 per unit of relaxation time). References for the
-ratios: the DARWIN PMP on the iCub (ICUB_FACTS.md section 1d) uses an isotropic-ish K_virt,
+ratios: the DARWIN PMP on the iCub (its PMPconfiguration.ini, see docs/references.md) uses an
+isotropic-ish K_virt,
 arm admittances of the same order for all arm joints and a trunk admittance 1-2 orders of
 magnitude smaller (a stiff trunk recruited when the arms are not enough).
 """

@@ -21,7 +21,7 @@ from typing import Mapping, NamedTuple, Sequence, cast
 import numpy as np
 
 from icub_pmp.errors import InvalidInput
-from icub_pmp.pmp.branching_network import BranchNetwork
+from icub_pmp.pmp.branch_network import BranchNetwork
 from icub_pmp.pmp.force_field import ForceField
 from icub_pmp.pmp.held_object import HeldObject
 from icub_pmp.pmp.jacobian_provider import JacobianProvider

@@ -28,7 +28,7 @@ import numpy as np
 
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
-from icub_pmp.pmp.branching_network import BranchNetwork
+from icub_pmp.pmp.branch_network import BranchNetwork
 from icub_pmp.pmp.force_field import ForceField
 from icub_pmp.pmp.jacobian_provider import JacobianProvider
 from icub_pmp.pmp.joint_limit_field import JointLimitField

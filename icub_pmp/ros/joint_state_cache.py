@@ -17,7 +17,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 
 from icub_pmp.errors import IcubPmpError
-from icub_pmp.nodes.raw_messages import RawJointStateReader, read_joint_state
+from icub_pmp.ros.raw_messages import RawJointStateReader, read_joint_state
 
 __all__ = ["JointStateCache", "MeasuredState"]
 

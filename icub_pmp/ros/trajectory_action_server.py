@@ -24,7 +24,7 @@ from icub_interfaces.action import FollowJointTrajectory
 from icub_pmp.control.impedance_controller import ImpedanceController
 from icub_pmp.control.trajectory_goal import GoalCode, GoalOutcome, TrajectoryGoal
 from icub_pmp.errors import IcubPmpError, UnknownName
-from icub_pmp.nodes.conversions import time_to_sec, trajectory_extras, trajectory_to_arrays
+from icub_pmp.ros.conversions import time_to_sec, trajectory_extras, trajectory_to_arrays
 
 __all__ = ["TrajectoryActionServer", "ACTION_NAME"]
 

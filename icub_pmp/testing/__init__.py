@@ -4,12 +4,16 @@ Launch-free integration testing: nodes run as real subprocesses (through
 ``scripts/run_node.sh``, exactly as a user starts them), each test session in its own
 ``ROS_DOMAIN_ID`` with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``; the test talks to them over
 DDS through an in-process :class:`RosProbe`.
+
+The launcher (:mod:`icub_pmp.graph`) and the probe (:mod:`icub_pmp.ros.probe`) are run-time
+modules that the demo uses too; they are re-exported here for the tests. This package adds
+what only tests and benchmarks use: :mod:`.bag_traffic` (the graph's traffic at known rates)
+and :mod:`.reach_echo_server` (a /pmp/reach server that echoes its requests).
 """
 
-from icub_pmp.testing.node_graph import NodeGraph
-from icub_pmp.testing.node_process import NodeProcess, repo_root
-from icub_pmp.testing.probe import RosProbe
-from icub_pmp.testing.ros_domain import reserve_domain_id, ros_environment
+from icub_pmp.config import repo_root
+from icub_pmp.graph import NodeGraph, NodeProcess, reserve_domain_id, ros_environment
+from icub_pmp.ros.probe import RosProbe
 
 __all__ = [
     "NodeGraph",

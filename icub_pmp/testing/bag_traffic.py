@@ -2,7 +2,7 @@
 
     python -m icub_pmp.testing.bag_traffic --duration 3 [--no-cameras] [--no-clock]
 
-Publishes, from one process, what the node graph records (INTERFACES.md): ``/clock`` and
+Publishes, from one process, what the node graph records: ``/clock`` and
 ``/joint_states`` (23 joints) and the four FT wrenches ``/ft/*`` at 1 kHz (best effort), both
 cameras ``/cam/left|right/image_raw`` (rgb8 320x240, 30 Hz, sensor-data QoS),
 ``/joint_trajectory`` (reliable, 2 Hz) and reach requests: a ``/pmp/reach`` service with

@@ -12,7 +12,8 @@ and occlusion (cover/uncover at an object's border) mark motion independent of t
 Isolated failures are filtered out (a failing node needs failing grid neighbours), kept nodes
 persist a few frames and are grouped into 8-connected blobs on the grid.
 
-The pipeline as coded in motionCUT (``ICUB_FACTS.md`` 1c) is followed, with eq. 13 evaluated
+The pipeline as coded in motionCUT (icub-main ``src/modules/motionCUT/main.cpp``) is followed,
+with eq. 13 evaluated
 explicitly (OpenCV's own LK error is a mean absolute difference, not eq. 13). The eq. 13 test
 stays the failure criterion; additions, each measured in ``bench/motion.py`` and switchable in
 :class:`MotionSegmenterConfig`:

@@ -1,6 +1,7 @@
 """MotionSegmenterConfig: the parameters of the motionCUT-style segmenter and its node.
 
-Defaults follow motionCUT as coded in icub-main (``ICUB_FACTS.md`` section 1c): grid step 6 px,
+Defaults follow motionCUT as coded in icub-main (``src/modules/motionCUT/main.cpp``): grid step
+6 px,
 LK 30 iterations / eps 0.3, at least 4 of 8 failing neighbours, 3-frame persistence, blobs of
 more than 10 nodes, grid over the central 0.75 x 0.75 of the image. Departures, each measured
 in ``bench/motion.py`` (BENCHMARKS.md): an 11x11 window instead of 15x15 (13x13 gave the same

@@ -26,9 +26,9 @@ from typing import Iterator, Mapping
 
 import numpy as np
 
+from icub_pmp.baselines.synthetic_sequence import textured_image, triangle_wave
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
-from icub_pmp.vision.synthetic_sequence import textured_image, triangle_wave
 
 __all__ = ["SequenceGenerator", "SequenceSpec", "SequenceFrame", "DIRECTIONS", "HEAD_AXES"]
 

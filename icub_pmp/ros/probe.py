@@ -1,4 +1,5 @@
-"""RosProbe: an in-process rclpy node in its own context, for tests that talk over DDS."""
+"""RosProbe: an in-process rclpy node in its own context, for tests and the demo that talk to
+the graph over DDS."""
 
 from __future__ import annotations
 
@@ -31,8 +32,8 @@ class RosProbe:
     Destroy the entities you create on :attr:`node` with :meth:`destroy`, not with
     ``node.destroy_*``: destroying a subscription, client or publisher from another thread while
     the executor waits on it makes rclpy raise ``InvalidHandle`` ("cannot use Destroyable because
-    destruction was requested") inside the spin thread (ros2/rclpy#1142, #1206). That used to kill
-    the probe's spin thread, after which every wait timed out. :meth:`destroy` runs the
+    destruction was requested") inside the spin thread (ros2/rclpy#1142, #1206), which would kill
+    the probe's spin thread (every later wait would time out). :meth:`destroy` runs the
     destruction on the spin thread, between two ``spin_once`` calls; the spin loop also survives
     that exception (counted in :attr:`spin_errors`) for code that destroys directly.
     """

@@ -10,12 +10,9 @@ import time
 from pathlib import Path
 from typing import Sequence
 
-__all__ = ["NodeProcess", "repo_root"]
+from icub_pmp.config import repo_root
 
-
-def repo_root() -> Path:
-    """The source tree root (holding ``scripts/``)."""
-    return Path(__file__).resolve().parents[2]
+__all__ = ["NodeProcess", "param_text"]
 
 
 class NodeProcess:
@@ -43,7 +40,7 @@ class NodeProcess:
             if params_file is not None:
                 ros_args += ["--params-file", str(params_file)]
             for k, v in (parameters or {}).items():
-                ros_args += ["-p", f"{k}:={_param_text(v)}"]
+                ros_args += ["-p", f"{k}:={param_text(v)}"]
             command = [str(repo_root() / "scripts/run_node.sh"), node, *args]
             if ros_args:
                 command += ["--ros-args", *ros_args]
@@ -124,9 +121,10 @@ class NodeProcess:
             pass
 
 
-def _param_text(v: object) -> str:
+def param_text(v: object) -> str:
+    """A parameter value as ``-p NAME:=VALUE`` text (ROS YAML syntax)."""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, (list, tuple)):
-        return "[" + ",".join(_param_text(x) for x in v) + "]"
+        return "[" + ",".join(param_text(x) for x in v) + "]"
     return str(v)

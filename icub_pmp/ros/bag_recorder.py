@@ -41,9 +41,9 @@ from rosbags.interfaces import (
 )
 
 from icub_pmp.bags import BagWriter, TopicHandle
-from icub_pmp.cli.session import matching_qos
 from icub_pmp.errors import BagError, IcubPmpError
-from icub_pmp.nodes.msg_types import get_interface
+from icub_pmp.ros.msg_types import get_interface
+from icub_pmp.ros.qos import matching_qos
 
 __all__ = ["BagRecorder", "RecordResult", "record", "qos_to_rosbags", "is_service_event"]
 

@@ -23,29 +23,19 @@ class CartesianNodeConfig(ConfigBase):
         /joint_trajectory before publishing (discovery right after start-up).
     controller_timeout: [s, wall] the go_to_pose action waits this long for the controller's
         FollowJointTrajectory server.
-    arrival_tolerance, settle_speed, settle_time, settle_timeout: how the action judges the
-        arrival on the measured hand (:class:`~icub_pmp.control.arrival_monitor.ArrivalConfig`).
     """
 
     default_chain: str = "torso_right_arm"
     prebuild_chains: tuple[str, ...] = ("torso_right_arm",)
     subscriber_timeout: float = 1.0
     controller_timeout: float = 5.0
-    arrival_tolerance: float = 0.01
-    settle_speed: float = 0.005
-    settle_time: float = 0.2
-    settle_timeout: float = 2.0
 
     def validate(self) -> None:
-        """Chain names must be known; the timeouts finite and >= 0, the arrival values > 0."""
+        """Chain names must be known; the timeouts finite and >= 0."""
         for name in ("subscriber_timeout", "controller_timeout"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ConfigError(f"{name} must be >= 0 s, got {v!r}")
-        for name in ("arrival_tolerance", "settle_speed", "settle_time", "settle_timeout"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise ConfigError(f"{name} must be > 0, got {v!r}")
         for name in (self.default_chain, *self.prebuild_chains):
             if name not in CHAIN_NAMES:
                 raise ConfigError(f"unknown chain {name!r}; valid: {', '.join(CHAIN_NAMES)}")

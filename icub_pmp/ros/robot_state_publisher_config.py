@@ -17,10 +17,15 @@ MESH_URIS = ("file", "package")
 
 @dataclasses.dataclass(frozen=True)
 class RobotStatePublisherConfig(ConfigBase):
-    """Rate of /tf and the form of the URDF published on /robot_description."""
+    """Rate of /tf and the form of the URDF published on /robot_description.
 
-    publish_frequency: float = 50.0  # highest rate of /tf messages [Hz] (wall clock)
-    mesh_uris: str = "file"  # "file" or "package" (see MESH_URIS)
+    Attributes:
+        publish_frequency: highest rate of /tf messages [Hz] (wall clock).
+        mesh_uris: file | package: form of the mesh URIs in the URDF (see MESH_URIS).
+    """
+
+    publish_frequency: float = 50.0
+    mesh_uris: str = "file"
 
     def validate(self) -> None:
         """Check ranges."""

@@ -28,7 +28,7 @@ from rosgraph_msgs.msg import Clock
 
 from icub_pmp.bags import BagReader, BagStatus, BagTopic
 from icub_pmp.errors import BagError, IcubPmpError, UnknownName
-from icub_pmp.nodes.msg_types import get_interface
+from icub_pmp.ros.msg_types import get_interface
 
 __all__ = ["PlayResult", "play", "qos_for_replay"]
 

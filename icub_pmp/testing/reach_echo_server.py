@@ -1,6 +1,9 @@
 """A Reach service server for interface tests (not a planner): answers each request with the
 distance of each target from root_link's origin as the residual and one trajectory point per
-hand, and prints one line per request so tests can count what was sent."""
+hand, and prints one line per request so tests can count what was sent.
+
+    python -m icub_pmp.testing.reach_echo_server
+"""
 
 from __future__ import annotations
 
@@ -15,12 +18,15 @@ from icub_interfaces.srv import Reach
 
 
 class ReachEchoServer(Node):
+    """Serve /pmp/reach with echoes (module doc)."""
+
     def __init__(self) -> None:
         super().__init__("reach_echo_server")
         self.create_service(Reach, "/pmp/reach", self.on_request)
         print("READY", flush=True)
 
     def on_request(self, req: Reach.Request, res: Reach.Response) -> Reach.Response:
+        """Answer with the targets' distances from the origin [m] as residuals."""
         print(f"REQUEST hands={list(req.hands)} tau={req.tau}", flush=True)
         res.hands = list(req.hands)
         for hand in req.hands:
@@ -36,6 +42,7 @@ class ReachEchoServer(Node):
 
 
 def main() -> None:
+    """Serve until SIGINT."""
     rclpy.init()
     node = ReachEchoServer()
     try:

@@ -9,8 +9,8 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from icub_pmp.control.sim_loop import LoopStep, SimLoop
 from icub_pmp.kinematics.robot_spec import RobotSpec
+from icub_sim_bridge.harness.sim_loop import LoopStep, SimLoop
 
 __all__ = [
     "min_jerk",

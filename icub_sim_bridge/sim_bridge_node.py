@@ -1,7 +1,7 @@
 """sim_bridge: the simulated iCub on ROS 2 (stands in for iCub_SIM / gazebo-yarp-plugins).
 
 A thin adapter over :class:`icub_sim_bridge.Simulator` (all physics there). Topics, services
-and frames follow ``INTERFACES.md``:
+and frames:
 
 publishes  /clock (every step), /joint_states (every step: position [rad], velocity [rad/s],
            effort = applied torque [N m], stamp = sim time), /ft/{l_arm_ft,r_arm_ft,l_leg_ft,
@@ -41,18 +41,11 @@ from __future__ import annotations
 
 import collections
 import math
-import os
-import signal
 import threading
-import time
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
-import rclpy
 from geometry_msgs.msg import PoseStamped, WrenchStamped
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
-from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rosgraph_msgs.msg import Clock
@@ -63,19 +56,23 @@ from icub_interfaces.msg import SelfContact as SelfContactMsg
 from icub_interfaces.msg import SelfContacts
 from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
 from icub_pmp.errors import IcubPmpError, InvalidInput
-from icub_pmp.nodes.conversions import (
+from icub_pmp.ros.conversions import (
     pose_to_arrays,
     validate_joint_state,
     wrench_to_array,
 )
-from icub_pmp.nodes.raw_messages import (
+from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.raw_messages import (
     RawJointState,
     RawJointStateReader,
     RawJointStateWriter,
     read_joint_state,
 )
 from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
+from icub_sim_bridge.lockstep_gate import LockstepGate
 from icub_sim_bridge.simulator import FT_SENSORS
+from icub_sim_bridge.step_pacer import StepPacer
 
 __all__ = ["SimBridge", "main"]
 
@@ -120,14 +117,9 @@ class SimBridge(Node):
 
     def __init__(self) -> None:
         super().__init__("sim_bridge")
-        defaults = SimConfig()
-        for name, value in defaults.to_dict().items():
-            self.declare_parameter(name, value, ParameterDescriptor(
-                description=f"SimConfig.{name} (see config/sim_bridge.yaml)",
-                read_only=name not in _RUNTIME_PARAMS))
-        params = {n: self.get_parameter(n).value for n in defaults.field_names()}
-        self.config = SimConfig.from_dict(params)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.params = ConfigParameters(
+            self, SimConfig, read_only=set(SimConfig.field_names()) - _RUNTIME_PARAMS,
+            reject=_keep_wall_time, on_change=self._on_config_change)
         self.sim = Simulator(self.config)
         self._names = list(self.sim.joint_names)
         self._valid_names = frozenset(self._names)
@@ -173,14 +165,13 @@ class SimBridge(Node):
         # --- commands and requests (handed from the executor thread to the loop)
         self._cmd_lock = threading.Lock()
         self._pending: collections.deque[_Command] = collections.deque()
-        self._answered = threading.Event()
-        self._last_stamp_ns = 0
+        self.lockstep = LockstepGate()
+        self.pacer = StepPacer()
         self._requests: collections.deque[tuple[Callable[[], Any], list, threading.Event]] = \
             collections.deque()
         self._wake = threading.Event()
         self._active_cache: dict[int, bool] = {}
         self.rejected = 0
-        self.timeouts = 0
         self.paused = self.config.start_paused
         # read from its bytes (raw_messages): the 1 kHz input of the lockstep loop
         self._effort_reader = RawJointStateReader()
@@ -197,31 +188,15 @@ class SimBridge(Node):
             f"{'on' if self.cameras else 'off'}, FT sign convention child_to_parent")
 
     # ------------------------------------------------------------------ parameters
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        changes = {}
-        for p in params:
-            if p.name == "use_sim_time":
-                if p.value:
-                    return SetParametersResult(successful=False,
-                                               reason="sim_bridge is the clock: use_sim_time "
-                                                      "must stay false")
-                continue
-            if p.name not in SimConfig.field_names():
-                continue
-            if p.name not in _RUNTIME_PARAMS and hasattr(self, "sim"):
-                return SetParametersResult(successful=False,
-                                           reason=f"{p.name} shapes the model: restart the node")
-            changes[p.name] = p.value
-        if not changes or not hasattr(self, "sim"):
-            return SetParametersResult(successful=True)
-        try:
-            cfg = SimConfig.from_dict({**self.config.to_dict(), **changes})
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        self.config = cfg
-        if "start_paused" in changes:
-            self.paused = cfg.start_paused
-        return SetParametersResult(successful=True)
+    @property
+    def config(self) -> SimConfig:
+        """The current configuration (``config/sim_bridge.yaml``, run-time changes)."""
+        return self.params.config
+
+    def _on_config_change(self, old: SimConfig, new: SimConfig, changed: frozenset[str]
+                          ) -> None:
+        if "start_paused" in changed:
+            self.paused = new.start_paused
 
     # ------------------------------------------------------------------ cameras
     def _setup_cameras(self) -> None:
@@ -285,13 +260,11 @@ class SimBridge(Node):
             self.rejected += 1
             self.get_logger().warning(f"/effort_command rejected ({self.rejected} so far): "
                                       f"{exc}", throttle_duration_sec=1.0)
-            if stamp_ns == self._last_stamp_ns:
-                self._answered.set()  # answered, with nothing usable: keep the last command
+            self.lockstep.answer(stamp_ns)  # answered, with nothing usable: keep the last one
             return
         with self._cmd_lock:
             self._pending.append(_Command(stamp_ns, idx, tau))
-        if stamp_ns == self._last_stamp_ns:
-            self._answered.set()
+        self.lockstep.answer(stamp_ns)
 
     def _apply_pending(self) -> None:
         if not self._pending:
@@ -377,7 +350,7 @@ class SimBridge(Node):
     def _publish_state(self) -> None:
         sim = self.sim
         ns = int(round(sim.time * 1e9))
-        self._last_stamp_ns = ns
+        self.lockstep.expect(ns)
         _set_stamp(self._clock_msg.clock, ns)
         self.pub_clock.publish(self._clock_msg)
         st = sim.joint_state()
@@ -447,96 +420,60 @@ class SimBridge(Node):
 
     # ------------------------------------------------------------------ the loop
     def run(self, should_stop: Callable[[], bool]) -> None:
-        """Step, publish, pace / lockstep until ``should_stop()``."""
+        """Step, publish, pace / lockstep until ``should_stop()`` (the physics thread)."""
         self._publish_state()
-        wall0, sim0 = time.perf_counter(), self.sim.time
-        rtf_prev, mode_prev = self.config.real_time_factor, self.config.mode
         while not should_stop():
             if self._requests:
                 self._drain_requests()
             if self.paused:
                 self._wake.wait(0.05)
                 self._wake.clear()
-                wall0, sim0 = time.perf_counter(), self.sim.time
+                self.pacer.restart(self.sim.time)
                 continue
             cfg = self.config
-            if cfg.real_time_factor != rtf_prev or cfg.mode != mode_prev:
-                wall0, sim0 = time.perf_counter(), self.sim.time
-                rtf_prev, mode_prev = cfg.real_time_factor, cfg.mode
             if cfg.mode == "lockstep":
-                if not self._answered.wait(cfg.lockstep_timeout):
-                    self.timeouts += 1
+                if not self.lockstep.wait(cfg.lockstep_timeout):
                     self.get_logger().warning(
                         f"lockstep: no /effort_command stamped t = {self.sim.time:.3f} s within "
-                        f"{cfg.lockstep_timeout} s ({self.timeouts} timeouts so far); stepping "
-                        f"with the last command", throttle_duration_sec=2.0)
+                        f"{cfg.lockstep_timeout} s ({self.lockstep.timeouts} timeouts so far); "
+                        "stepping with the last command", throttle_duration_sec=2.0)
                     if should_stop():
                         break
-                self._answered.clear()
+                self.pacer.restart(self.sim.time)
             self._apply_pending()
             self.sim.step()
             self._publish_state()
-            if cfg.mode == "free_run" and cfg.real_time_factor > 0:
-                target = wall0 + (self.sim.time - sim0) / cfg.real_time_factor
-                ahead = target - time.perf_counter()
-                if ahead > 0.002:
-                    self._wake.wait(ahead - 0.001)
+            if cfg.mode == "free_run":
+                wait = self.pacer.wait_time(self.sim.time, cfg.real_time_factor)
+                if wait > 0:
+                    self._wake.wait(wait)
                     self._wake.clear()
-                elif ahead < -0.1:  # far behind (e.g. a pause in the machine): do not catch up
-                    wall0, sim0 = time.perf_counter(), self.sim.time
 
-    def close(self) -> None:
-        """Stop the camera worker."""
+    def destroy_node(self) -> None:
+        """Stop the camera worker, then destroy the node."""
         if self.cameras is not None:
             self.cameras.close()
             self.cameras = None
+        super().destroy_node()
+
+    @property
+    def timeouts(self) -> int:
+        """Lockstep steps taken without their answer."""
+        return self.lockstep.timeouts
+
+
+def _keep_wall_time(params: Mapping[str, Any]) -> str | None:
+    """The simulator is the clock: it never runs on /clock itself."""
+    if params.get("use_sim_time"):
+        return "sim_bridge is the clock: use_sim_time must stay false"
+    return None
 
 
 def main(args: list[str] | None = None) -> None:
-    """Entry point (``ros2 run icub_pmp sim_bridge``).
-
-    The executor spins on the main thread (where rclpy's SIGINT/SIGTERM handling works);
-    the physics loop runs on its own thread and stops with the context. A failure of the
-    physics loop is logged and ends the process.
-    """
-    rclpy.init(args=args)
-    node = None
-    executor = None
-    stop = threading.Event()
-    loop = None
-    try:
-        node = SimBridge()
-        executor = EventsExecutor()
-        executor.add_node(node)
-        loop = threading.Thread(target=_physics, args=(node, stop), name="physics")
-        loop.start()
-        # spin_once in a loop: EventsExecutor.spin() of the Jazzy wheel never returns on
-        # SIGINT, and waking it from another thread deadlocks
-        while rclpy.ok() and loop.is_alive():
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        stop.set()
-        if loop is not None:
-            loop.join(timeout=10.0)
-        if node is not None:
-            node.close()
-            node.destroy_node()
-        if executor is not None:
-            executor.shutdown()
-        rclpy.try_shutdown()
-
-
-def _physics(node: SimBridge, stop: threading.Event) -> None:
-    """The physics thread: on a failure, log it and stop the node (SIGINT to ourselves)."""
-    try:
-        node.run(lambda: stop.is_set() or not rclpy.ok())
-    except Exception as exc:
-        if stop.is_set() or not rclpy.ok():
-            return  # shutting down: publishers may already be invalid
-        node.get_logger().fatal(f"physics loop failed: {type(exc).__name__}: {exc}")
-        os.kill(os.getpid(), signal.SIGINT)
+    """Entry point (``ros2 run icub_pmp sim_bridge``): the executor spins on the main thread,
+    the physics loop (:meth:`SimBridge.run`) on its own; a failure of the loop is logged and
+    ends the process (status 1)."""
+    spin_node(SimBridge, args, "sim_bridge", worker=SimBridge.run)
 
 
 if __name__ == "__main__":

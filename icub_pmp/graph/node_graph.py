@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from typing import Iterable, Mapping
 
-from icub_pmp.testing.node_process import NodeProcess, _param_text, repo_root
+from icub_pmp.config import repo_root
+from icub_pmp.graph.node_process import NodeProcess, param_text
 
 __all__ = ["NodeGraph"]
 
@@ -40,7 +41,7 @@ class NodeGraph:
         if extra:
             cmd.append("--ros-args")
             for k, v in extra.items():
-                cmd += ["-p", f"{k}:={_param_text(v)}"]
+                cmd += ["-p", f"{k}:={param_text(v)}"]
         return cmd
 
     def start(self, node: str) -> NodeProcess:

@@ -28,6 +28,7 @@ __all__ = [
     "RawJointState",
     "RawJointStateReader",
     "RawJointStateWriter",
+    "raw_header_stamp_ns",
     "raw_wrench_stamped",
     "read_joint_state",
 ]
@@ -35,6 +36,17 @@ __all__ = [
 _ENCAPSULATION = 4
 _U32 = struct.Struct("<I")
 _STAMP = struct.Struct("<iI")
+
+
+def raw_header_stamp_ns(data: bytes) -> int:
+    """``header.stamp`` [ns] of a serialised (CDR) message whose first field is a
+    std_msgs/Header (JointState, WrenchStamped, ...), read without deserialising it: a
+    subscriber with ``raw=True`` can drop the samples it does not need for free."""
+    if len(data) < 12:
+        raise InvalidInput(f"serialised message too short ({len(data)} bytes) for a header")
+    fmt = "<iI" if data[1] & 1 else ">iI"  # CDR encapsulation: odd id = little endian
+    sec, nanosec = struct.unpack_from(fmt, data, 4)
+    return sec * 1_000_000_000 + nanosec
 
 
 def _check_little_endian(data: bytes, minimum: int) -> None:
@@ -73,7 +85,7 @@ def raw_wrench_stamped(data: bytes) -> tuple[int, np.ndarray]:
 
 class RawJointState(NamedTuple):
     """A sensor_msgs/JointState read raw, with the message's field names (so
-    :func:`~icub_pmp.nodes.conversions.joint_state_arrays` takes it): ``stamp_ns``, ``name``
+    :func:`~icub_pmp.ros.conversions.joint_state_arrays` takes it): ``stamp_ns``, ``name``
     (a list shared between the samples that carry the same names: do not modify it) and
     ``position``, ``velocity``, ``effort`` (n,) arrays (possibly empty)."""
 

@@ -1,0 +1,9 @@
+"""Starting the node graph as a user does: one subprocess per node through its script
+(``scripts/<node>.sh``), in a private DDS domain kept on this machine. No rclpy import: used
+by the demo, the tests and the benchmarks."""
+
+from icub_pmp.graph.node_graph import NodeGraph
+from icub_pmp.graph.node_process import NodeProcess, param_text
+from icub_pmp.graph.ros_domain import reserve_domain_id, ros_environment
+
+__all__ = ["NodeGraph", "NodeProcess", "param_text", "reserve_domain_id", "ros_environment"]
