@@ -10,8 +10,10 @@ import pytest
 from icub_pmp.cartesian import IkConfig, MinJerkConfig
 from icub_pmp.config import ConfigBase, config_dir, load_params_file
 from icub_pmp.control import ImpedanceControllerConfig
+from icub_pmp.control.arrival_monitor import ArrivalConfig
 from icub_pmp.dynamics import WrenchEstimatorConfig
 from icub_pmp.errors import ConfigError, UnknownName
+from icub_pmp.gaze import GazeControllerConfig, GazeNodeConfig
 from icub_pmp.kinematics import IcubModel, RobotSpec
 from icub_pmp.pmp import PmpConfig
 from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
@@ -22,15 +24,17 @@ from icub_sim_bridge import SimConfig
 
 #: config/<node>.yaml -> the configuration classes the node declares as its parameters
 NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
-    "cartesian_solver": (IkConfig, MinJerkConfig, CartesianNodeConfig),
+    "cartesian_solver": (IkConfig, MinJerkConfig, CartesianNodeConfig, ArrivalConfig),
+    "gaze_controller": (GazeControllerConfig, GazeNodeConfig),
     "impedance_controller": (ImpedanceControllerConfig,),
     "motion_segmenter": (MotionSegmenterConfig,),
-    "pmp_planner": (PmpConfig, PmpNodeConfig),
+    "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig),
     "robot_state_publisher": (RobotStatePublisherConfig,),
     "sim_bridge": (SimConfig,),
     "wrench_estimator": (WrenchEstimatorConfig,),
 }
-NOT_NODE_FILES = {"robot.yaml"}  # the robot description, not a --params-file
+NOT_NODE_FILES = {"robot.yaml"}
+ROS_NODE_PARAMETERS = ("use_sim_time",)  # declared by rclpy for every node  # the robot description, not a --params-file
 
 
 @dataclasses.dataclass(frozen=True)
@@ -126,11 +130,11 @@ def test_every_shipped_params_file_has_its_configurations():
 @pytest.mark.parametrize("node", sorted(NODE_CONFIGS))
 def test_shipped_params_file_loads_into_its_configurations(node):
     """config/<node>.yaml: every key is a field of one of the node's configuration classes
-    (field names = ROS parameter names) and each class builds from it (types and ranges
-    validated)."""
+    (field names = ROS parameter names) or a parameter of every ROS node (``use_sim_time``),
+    and each class builds from it (types and ranges validated)."""
     path = config_dir() / f"{node}.yaml"
     params = load_params_file(path, node)
-    known: set[str] = set()
+    known: set[str] = set(ROS_NODE_PARAMETERS)
     for cls in NODE_CONFIGS[node]:
         cfg = cls.from_yaml(path, node)
         known |= set(cls.field_names())

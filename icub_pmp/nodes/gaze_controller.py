@@ -15,7 +15,7 @@ Tracking: while ``tracking`` is true, every geometry_msgs/PointStamped on ``trac
 running plan's state (:meth:`~icub_pmp.gaze.GazeController.update`).
 
 Subscribes ``/joint_states`` (read raw on a thread of its own,
-:class:`~icub_pmp.nodes.joint_state_listener.JointStateListener`; its stamps are the node's
+:class:`~icub_pmp.ros.joint_state_cache.JointStateCache`; its stamps are the node's
 time base, as for the impedance controller). Publishes ``/gaze/fixation_point``
 (PointStamped in root_link, the point the optical axes meet at, ``fixation_rate`` Hz on the
 node clock) and ``/gaze/target`` (PointStamped in root_link, each new target).
@@ -29,15 +29,13 @@ topic; the node never dies on them. Parameters: config/gaze_controller.yaml (=
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import threading
 import time
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from geometry_msgs.msg import PointStamped
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -48,14 +46,15 @@ from icub_interfaces.srv import LookAt
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.gaze import GAZE_JOINTS, GazeController, GazeControllerConfig, GazeNodeConfig
 from icub_pmp.gaze.gaze_plan import GazePlan
-from icub_pmp.nodes.joint_state_listener import JointStateListener
 from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     make_joint_state,
     point_to_array,
     sec_to_time,
 )
+from icub_pmp.ros.joint_state_cache import JointStateCache
 from icub_pmp.ros.node_runner import spin_node
+from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 
 __all__ = ["GazeControllerNode", "main"]
@@ -77,24 +76,13 @@ class GazeControllerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("gaze_controller")
-        for cls in _CONFIGS:
-            for f in dataclasses.fields(cls):
-                default = getattr(cls(), f.name)
-                value = list(default) if isinstance(default, tuple) else default
-                self.declare_parameter(f.name, value,
-                                       ParameterDescriptor(description=cls.__name__))
-        try:
-            self.config, self.node_config = self._configs({})
-        except IcubPmpError as exc:
-            raise SystemExit(f"gaze_controller: bad parameters: {exc}") from exc
-        self.gaze = GazeController(self.config)
         self._lock = threading.Lock()
+        self.params = ConfigParameters(self, _CONFIGS, on_change=self._on_config_change)
+        self.gaze = GazeController(self.config)
         self._active: _Active | None = None
         self._last_track = -math.inf
         # the joint states arrive on their own thread: a look_at that waits keeps seeing them
-        self._listener = JointStateListener(
-            f"{self.get_name()}_joint_states",
-            lambda text: self.get_logger().warning(text, throttle_duration_sec=5.0))
+        self._listener = JointStateCache(self)
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self.traj_pub = self.create_publisher(JointTrajectory, "/joint_trajectory", reliable)
         self.fixation_pub = self.create_publisher(PointStamped, "/gaze/fixation_point", 10)
@@ -105,46 +93,35 @@ class GazeControllerNode(Node):
             1.0 / self.node_config.fixation_rate, self._on_fixation_timer)
         self.create_service(LookAt, "/gaze/look_at", self._on_look_at)
         self.create_service(SetBool, "/gaze/set_tracking", self._on_set_tracking)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
-        self.add_post_set_parameters_callback(self._on_parameters_set)
         self.get_logger().info(
             f"serving /gaze/look_at and /gaze/set_tracking (tracking "
             f"{'on' if self.node_config.tracking else 'off'}, topic "
             f"{self.node_config.tracking_topic})")
 
     # ------------------------------------------------------------------ parameters
-    def _configs(self, changes: dict[str, Any]
-                 ) -> tuple[GazeControllerConfig, GazeNodeConfig]:
-        params = {f.name: self.get_parameter(f.name).value
-                  for cls in _CONFIGS for f in dataclasses.fields(cls)}
-        params.update(changes)
-        return (GazeControllerConfig.from_dict(params, ignore_unknown=True),
-                GazeNodeConfig.from_dict(params, ignore_unknown=True))
+    @property
+    def config(self) -> GazeControllerConfig:
+        """The gaze controller's configuration."""
+        return self.params.get(GazeControllerConfig)
 
-    def _on_set_parameters(self, params: list) -> SetParametersResult:
-        names = {f.name for cls in _CONFIGS for f in dataclasses.fields(cls)}
-        changes = {p.name: p.value for p in params if p.name in names}
-        try:
-            self._configs(changes)
-        except IcubPmpError as exc:
-            return SetParametersResult(successful=False, reason=str(exc))
-        return SetParametersResult(successful=True)
+    @property
+    def node_config(self) -> GazeNodeConfig:
+        """The node's own parameters."""
+        return self.params.get(GazeNodeConfig)
 
-    def _on_parameters_set(self, params: list) -> None:
-        config, node_config = self._configs({})
+    def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
+        config, node_config = new
         with self._lock:
-            if config != self.config:
+            if config != old[0]:
                 self.gaze = GazeController(config, self.gaze.model)
                 self._active = None
-            old = self.node_config
-            self.config, self.node_config = config, node_config
-        if node_config.tracking_topic != old.tracking_topic:
+        if node_config.tracking_topic != old[1].tracking_topic:
             self._subscribe_tracking(node_config.tracking_topic)
-        if node_config.fixation_rate != old.fixation_rate:
+        if node_config.fixation_rate != old[1].fixation_rate:
             self.destroy_timer(self._fixation_timer)
             self._fixation_timer = self.create_timer(
                 1.0 / node_config.fixation_rate, self._on_fixation_timer)
-        if node_config.tracking != old.tracking:
+        if node_config.tracking != old[1].tracking:
             self.get_logger().info(f"tracking {'on' if node_config.tracking else 'off'} "
                                    f"({node_config.tracking_topic})")
 
@@ -158,10 +135,10 @@ class GazeControllerNode(Node):
     # ------------------------------------------------------------------ inputs
     def _joints(self) -> tuple[float, dict[str, float]]:
         """(time [s], {joint: position [rad]}) of the latest joint states."""
-        js = self._listener.latest
+        js = self._listener.latest()
         if js is None:
             raise InvalidInput("no /joint_states received yet: the head posture is unknown")
-        return js.time, js.as_dict()
+        return js.t, js.positions
 
     def _target_in_root(self, msg: PointStamped, joints: dict[str, float]) -> np.ndarray:
         """The message's point [m] in root_link (frames transformed at the current posture)."""
@@ -192,7 +169,7 @@ class GazeControllerNode(Node):
         wait = self.node_config.subscriber_timeout
         note = subscriber_note(wait_for_subscribers(self.traj_pub, wait), wait)
         # the joint states went on while planning: send the plan from the current time
-        late = max(0.0, self._listener.latest.time - now)
+        late = max(0.0, self._listener.latest().t - now)
         t, q, qd = plan.command(since=late)
         traj = arrays_to_trajectory(plan.joint_names, t, q, qd, stamp=sec_to_time(now + late))
         self.traj_pub.publish(traj)
@@ -283,10 +260,10 @@ class GazeControllerNode(Node):
 
     # ------------------------------------------------------------------ tracking, state
     def _on_tracking_target(self, msg: PointStamped) -> None:
-        js = self._listener.latest
+        js = self._listener.latest()
         if not self.node_config.tracking or js is None:
             return
-        now = js.time
+        now = js.t
         if now - self._last_track < self.node_config.tracking_min_interval:
             return
         try:
@@ -301,7 +278,7 @@ class GazeControllerNode(Node):
                                     throttle_duration_sec=2.0)
 
     def _on_fixation_timer(self) -> None:
-        if self._listener.latest is None:
+        if self._listener.latest() is None:
             return
         try:
             now, joints = self._joints()
@@ -313,7 +290,7 @@ class GazeControllerNode(Node):
 
 
     def destroy_node(self) -> None:
-        """Stop the joint-state listener, then destroy the node."""
+        """Stop the joint-state cache's thread, then destroy the node."""
         self._listener.close()
         super().destroy_node()
 

@@ -1,22 +1,30 @@
-"""JointStateCache: the latest /joint_states of the robot, kept as bytes and read on demand.
+"""JointStateCache: the latest /joint_states of the robot, received on a thread of its own and
+read on demand.
 
 Nodes that only look at the robot's posture now and then (planners, the gaze controller, goal
-monitors) should not pay rclpy's per-field deserialisation at 1 kHz: the subscription takes
-the serialised bytes (``raw=True``) and :meth:`JointStateCache.latest` reads the most recent
-one only when asked.
+monitors) should not pay for 1 kHz joint states on their own executor, nor stop seeing them
+while a callback of theirs waits. The cache receives them on a small helper node
+(``<node>_joint_states``, no parameters, no ``use_sim_time`` and thus no ``/clock``) spun by an
+``EventsExecutor`` on a background thread (about 6 % of a core at 1 kHz, against about 26 %
+with rclpy's default executor), keeps the serialised bytes of the newest sample, and reads them
+(:mod:`icub_pmp.ros.raw_messages`) only when :meth:`JointStateCache.latest` is called.
 """
 
 from __future__ import annotations
 
+import threading
 import time
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 
-from icub_pmp.errors import IcubPmpError
+from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.ros.raw_messages import RawJointStateReader, read_joint_state
 
 __all__ = ["JointStateCache", "MeasuredState"]
@@ -32,20 +40,43 @@ class MeasuredState(NamedTuple):
 
 
 class JointStateCache:
-    """Subscribes ``topic`` (raw) on ``node``; :meth:`latest` reads the newest sample.
+    """The newest good sample of ``topic`` for ``node`` (module doc).
 
-    Malformed samples are skipped with a throttled warning (the previous good one stays).
+    Malformed samples are skipped (the previous good one stays) and reported through
+    ``on_error`` (default: a throttled warning of ``node``).
     """
 
-    def __init__(self, node: Node, topic: str = "/joint_states", callback_group=None):
-        self._node = node
+    def __init__(self, node: Node, topic: str = "/joint_states",
+                 on_error: Callable[[str], None] | None = None):
+        self._on_error = on_error or (lambda text: node.get_logger().warning(
+            text, throttle_duration_sec=5.0))
         self._reader = RawJointStateReader()
+        self._lock = threading.Lock()
         self._data: bytes | None = None
         self._wall = 0.0
         self._cached: MeasuredState | None = None
+        self._bad_wall = -1.0
         self.count = 0
-        node.create_subscription(JointState, topic, self._on_data, qos_profile_sensor_data,
-                                 raw=True, callback_group=callback_group)
+        self.node = Node(f"{node.get_name()}_joint_states", namespace=node.get_namespace(),
+                         context=node.context, use_global_arguments=False)
+        self.node.create_subscription(JointState, topic, self._on_data,
+                                      qos_profile_sensor_data, raw=True)
+        self._executor = EventsExecutor(context=node.context)
+        self._executor.add_node(self.node)
+        self._stop = False
+        self._thread = threading.Thread(target=self._spin, name=self.node.get_name(),
+                                        daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        try:
+            while not self._stop and rclpy.ok(context=self.node.context):
+                self._executor.spin_once(timeout_sec=0.1)
+        except (ExternalShutdownException, KeyboardInterrupt):
+            pass
+        except Exception:
+            if rclpy.ok(context=self.node.context) and not self._stop:
+                raise
 
     def _on_data(self, data: bytes) -> None:
         self._data = data
@@ -54,24 +85,32 @@ class JointStateCache:
 
     def latest(self) -> MeasuredState | None:
         """The newest good sample, or None before the first."""
-        data = self._data
-        if data is None:
+        with self._lock:
+            data, wall = self._data, self._wall
+            if data is None or (self._cached is not None and self._cached.wall == wall):
+                return self._cached
+            if wall == self._bad_wall:
+                return self._cached
+            try:
+                m = read_joint_state(self._reader, data)
+                if m.position.shape != (len(m.name),) or not np.all(np.isfinite(m.position)):
+                    raise InvalidInput(f"{len(m.name)} finite positions expected, got "
+                                       f"{m.position.size}")
+            except IcubPmpError as exc:
+                self._bad_wall = wall
+                self._on_error(f"/joint_states sample skipped: {exc}")
+                return self._cached
+            self._cached = MeasuredState(m.stamp_ns * 1e-9,
+                                         dict(zip(m.name, m.position.tolist())), wall)
             return self._cached
-        if self._cached is not None and self._cached.wall == self._wall:
-            return self._cached
-        try:
-            m = read_joint_state(self._reader, data)
-            if len(m.position) != len(m.name) or not np.all(np.isfinite(m.position)):
-                raise IcubPmpError(f"{len(m.position)} finite positions expected for "
-                                   f"{len(m.name)} names")
-        except IcubPmpError as exc:
-            self._node.get_logger().warning(f"/joint_states sample skipped: {exc}",
-                                            throttle_duration_sec=5.0)
-            return self._cached
-        self._cached = MeasuredState(m.stamp_ns * 1e-9, dict(zip(m.name, m.position.tolist())),
-                                     self._wall)
-        return self._cached
 
     def wall_age(self) -> float:
         """Wall time since the last sample arrived [s] (inf before the first)."""
         return time.monotonic() - self._wall if self._data is not None else float("inf")
+
+    def close(self) -> None:
+        """Stop the thread and destroy the helper node."""
+        self._stop = True
+        self._thread.join(timeout=2.0)
+        self._executor.shutdown()
+        self.node.destroy_node()
