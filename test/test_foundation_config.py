@@ -33,8 +33,8 @@ NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
     "sim_bridge": (SimConfig,),
     "wrench_estimator": (WrenchEstimatorConfig,),
 }
-NOT_NODE_FILES = {"robot.yaml"}
-ROS_NODE_PARAMETERS = ("use_sim_time",)  # declared by rclpy for every node  # the robot description, not a --params-file
+NOT_NODE_FILES = {"robot.yaml"}  # the robot description, not a --params-file
+ROS_NODE_PARAMETERS = ("use_sim_time",)  # declared by rclpy for every node
 
 
 @dataclasses.dataclass(frozen=True)
