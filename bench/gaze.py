@@ -116,9 +116,9 @@ class Rig:
             plan = self.gaze.plan(p, self.joints())
         self.plan_ms.append(1e3 * (time.perf_counter() - t0))
         c = self.loop.controller
-        t, q, qd = plan.command()
-        c.set_trajectory(c.make_trajectory(plan.joint_names, t, q, qd, start=self.loop.t),
-                         self.loop.t)
+        # the whole plan from its start sample, as the node sends it
+        c.set_trajectory(c.make_trajectory(plan.joint_names, plan.t, plan.q, plan.qd,
+                                           start=self.loop.t), self.loop.t)
         self.plan, self.plan_start = plan, self.loop.t
         return plan
 

@@ -57,9 +57,9 @@ from icub_pmp.kinematics.eye_kinematics import (
     EyeKinematics,
 )
 from icub_pmp.kinematics.robot_spec import RobotSpec, urdf_path
+from icub_pmp.kinematics.tri_mesh import TriMesh
+from icub_pmp.kinematics.urdf_robot import UrdfRobot
 from icub_sim_bridge.sim_config import SimConfig
-from icub_sim_bridge.tri_mesh import TriMesh
-from icub_sim_bridge.urdf_robot import UrdfRobot
 
 __all__ = ["ModelBuilder", "BuiltModel", "GROUP_VISUAL", "GROUP_LEGS", "GROUP_COLLISION",
            "OBJECT_NAMES", "EYE_CAMERAS"]

@@ -55,11 +55,14 @@ def _run(c: ImpedanceController, t0: float, t1: float, follow: bool = True,
 
 
 def test_robot_spec_rate_limits_are_the_cited_values():
-    """config/robot.yaml: 100 deg/s on every joint (icub-models jntVelMax), 2000 deg/s^2."""
+    """config/robot.yaml: 100 deg/s (icub-models jntVelMax) and 2000 deg/s^2 on the torso, arms
+    and neck; 1000 deg/s (the real iCub's head boards) and 20000 deg/s^2 on the eyes."""
     spec = RobotSpec.load()
     for j in spec.actuated_joints:
-        assert spec.velocity_limit(j) == pytest.approx(math.radians(100.0))
-        assert spec.acceleration_limit(j) == pytest.approx(math.radians(2000.0))
+        eye = j in spec.eye_joints
+        assert spec.velocity_limit(j) == pytest.approx(math.radians(1000.0 if eye else 100.0))
+        assert spec.acceleration_limit(j) == pytest.approx(
+            math.radians(20000.0 if eye else 2000.0))
 
 
 def test_peak_rates_of_a_min_jerk_point_to_point():

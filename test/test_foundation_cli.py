@@ -94,7 +94,7 @@ def test_reach_bad_input_exits_with_one_line_and_sends_nothing(reach_server, arg
     assert "Traceback" not in out.stderr
     # a good goal after it is the next request the server logs: the bad one sent nothing
     tau = 100.0 + before  # names this request in the server's log
-    ok = icub("reach", "right=-0.3,0.1,0.0", "--tau", str(tau))
+    ok = icub("reach", "right=-0.3,0.1,0.0", "--no-wait", "--tau", str(tau))
     assert ok.returncode == 0, ok.stderr
     assert reach_server.wait_for_output(f"tau={tau}", 30), reach_server.output()
     assert reach_server.output().count("REQUEST") == before + 1

@@ -277,23 +277,6 @@ def test_tracking_update_continues_smoothly(gaze, model, rest):
         assert _axis_errors(model, _with(rest, u.q[-1]), p).max() < 2e-3
 
 
-def test_command_drops_the_part_already_past(gaze, rest):
-    """GazePlan.command(since) sends the samples after ``since`` with times counted from it
-    (what the node publishes after spending ``since`` planning); by default all but the
-    start sample."""
-    plan = gaze.plan(np.array([-0.4, 0.1, 0.1]), rest)
-    t, q, qd = plan.command()
-    np.testing.assert_allclose(t, plan.t[1:])
-    np.testing.assert_allclose(q, plan.q[1:])
-    t2, q2, qd2 = plan.command(since=0.035)
-    assert t2[0] == pytest.approx(0.005) and np.all(np.diff(t2) > 0)
-    np.testing.assert_allclose(q2, plan.q[plan.t > 0.035])
-    np.testing.assert_allclose(qd2, plan.qd[plan.t > 0.035])
-    t3, q3, _ = plan.command(since=plan.duration + 1.0)  # all past: hold the last point
-    assert len(t3) == 1 and t3[0] > 0
-    np.testing.assert_allclose(q3[0], plan.q[-1])
-
-
 def test_fixation_point_of_the_solution_is_the_target(gaze, rest):
     """GazeController.fixation_point at the solved posture returns the target."""
     p = np.array([-0.3, -0.15, 0.05])
@@ -316,3 +299,19 @@ def test_configs_validate_and_the_shipped_yaml_loads():
         GazeControllerConfig.from_dict({"neck_trajtime": 1.0})
     with pytest.raises(ConfigError, match="tracking_topic"):
         GazeNodeConfig(tracking_topic="")
+
+
+def test_a_large_head_turn_stays_within_the_joint_limits(gaze, rest):
+    """A point far to the side needs a fast neck at the default 0.75 s: the plan keeps every
+    head joint within its velocity and acceleration limits (config/robot.yaml) by
+    lengthening the neck's trajectory, and still fixates the point."""
+    from icub_pmp.control.joint_trajectory import JointTrajectory
+
+    p = np.array([-0.2, 0.6, 0.6])
+    fast = gaze._rollout(p, rest, None, None, gaze.config.neck_traj_time)
+    over = gaze.rate_limits.report(JointTrajectory(fast.joint_names, fast.t, fast.q, fast.qd))
+    assert not over.within(0.05)  # the iKinGazeCtrl default time is too fast for this turn
+    plan = gaze.plan(p, rest)
+    rep = gaze.rate_limits.report(JointTrajectory(plan.joint_names, plan.t, plan.q, plan.qd))
+    assert rep.within(0.05), rep.describe()
+    assert plan.duration > 0.75

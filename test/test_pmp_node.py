@@ -129,7 +129,7 @@ def _next_published_is(probe, traj, n: int) -> None:
     executable with or without /joint_states."""
     start = make_joint_state(["r_elbow"], position=[0.5])
     resp = probe.call("/pmp/reach", Reach, request(start_state=start))
-    assert resp.success and "published" in resp.message, resp.message
+    assert resp.success and "sent on /joint_trajectory" in resp.message, resp.message
     assert probe.wait_for(lambda: len(traj.msgs) > n, 10.0)
     sent = traj.msgs[n]
     assert len(traj.msgs) == n + 1

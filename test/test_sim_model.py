@@ -10,10 +10,10 @@ import pytest
 from icub_pmp.errors import ConfigError, InvalidInput, UnknownName
 from icub_pmp.kinematics import IcubModel, RobotSpec
 from icub_pmp.kinematics.eye_kinematics import EyeKinematics, dh_transform
+from icub_pmp.kinematics.tri_mesh import TriMesh
+from icub_pmp.kinematics.urdf_robot import rpy_matrix
 from icub_sim_bridge import SimConfig
 from icub_sim_bridge.model_builder import EYE_CAMERAS
-from icub_sim_bridge.tri_mesh import TriMesh
-from icub_sim_bridge.urdf_robot import rpy_matrix
 
 
 def _q_dict(model: IcubModel, q: np.ndarray) -> dict[str, float]:

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from icub_pmp.kinematics import IcubModel
+from icub_pmp.kinematics.urdf_robot import UrdfRobot
 from icub_sim_bridge import FT_SENSORS, Simulator
-from icub_sim_bridge.urdf_robot import UrdfRobot
 
 G = np.array([0.0, 0.0, -9.81])
 

@@ -43,6 +43,8 @@ from typing import Mapping
 
 import numpy as np
 
+from icub_pmp.control.joint_trajectory import JointTrajectory
+from icub_pmp.control.trajectory_limits import JointRateLimits
 from icub_pmp.errors import InvalidInput
 from icub_pmp.gaze.eye_fixation import EYE_JOINTS, EyeFixation
 from icub_pmp.gaze.gaze_controller_config import GazeControllerConfig
@@ -75,6 +77,9 @@ class GazeController:
                                c.joint_limit_margin, c.rest_joint_weights)
         self._neck_idx = self.neck.idx
         self.joint_names = GAZE_JOINTS
+        #: the head joints' velocity/acceleration limits (config/robot.yaml): a plan whose
+        #: neck would exceed them is replanned with a longer neck trajectory time
+        self.rate_limits = JointRateLimits.from_spec(self.model.spec, GAZE_JOINTS)
 
     # ------------------------------------------------------------------ inputs
     def configuration(self, joints: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
@@ -164,7 +169,10 @@ class GazeController:
     def plan(self, target: np.ndarray, joints: Mapping[str, float],
              start: GazeState | None = None, previous: GazeSolution | None = None,
              neck_traj_time: float | None = None) -> GazePlan:
-        """Solve and roll out the neck and eye trajectories to ``target`` (module doc, 3).
+        """Solve and roll out the neck and eye trajectories to ``target`` (module doc, 3),
+        within the head joints' velocity and acceleration limits: when the neck would exceed
+        them (a large head turn), the neck trajectory time is lengthened until it does not
+        (the eyes' time is kept: their limits are ten times the neck's).
 
         Args:
             target: fixation point (3,) [m] in root_link.
@@ -183,6 +191,22 @@ class GazeController:
             raise InvalidInput(
                 f"neck_traj_time: expected a time longer than eyes_traj_time = "
                 f"{c.eyes_traj_time} s, got {neck_traj_time}")
+        for _ in range(6):
+            plan = self._rollout(target, joints, start, previous, T_neck)
+            if len(plan.t) < 2:
+                return plan
+            rep = self.rate_limits.report(
+                JointTrajectory(GAZE_JOINTS, plan.t, plan.q, plan.qd))
+            if rep.within(0.02):
+                return plan
+            T_neck *= rep.time_scale * 1.05
+        return plan
+
+    def _rollout(self, target: np.ndarray, joints: Mapping[str, float],
+                 start: GazeState | None, previous: GazeSolution | None,
+                 T_neck: float) -> GazePlan:
+        """One roll-out of :meth:`plan` with the neck trajectory time ``T_neck`` [s]."""
+        c = self.config
         q, eyes0 = self.configuration(joints)
         # the start and the path keep to the hard limits, the targets to the margin
         lo, hi = self.model.lower[self._neck_idx], self.model.upper[self._neck_idx]

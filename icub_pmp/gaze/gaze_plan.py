@@ -81,15 +81,3 @@ class GazePlan:
     def state_at(self, t: float) -> GazeState:
         """Controller state at time ``t`` [s] from the start (the sample at or before it)."""
         return self.states[self.index_at(t)]
-
-    def command(self, since: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """What to send to the joint controller: (times (M,) [s], positions (M, 6),
-        velocities (M, 6)) of the samples after ``since`` [s] (default: all but the start
-        sample), times counted from ``since``; the controller joins the first of them from
-        its own current set-point. ``since`` > 0 drops the part of the plan that is already
-        past when it is published (the time spent planning)."""
-        keep = self.t > since + 1e-9
-        if not keep.any():
-            keep[-1] = True
-        t = self.t[keep] - since
-        return np.maximum(t, 1e-3), self.q[keep], self.qd[keep]

@@ -134,6 +134,10 @@ def _load_cached(path: str) -> RobotSpec:
         acceleration_limits=_rad_limits(d.get("acceleration_limits"), path,
                                         "acceleration_limits"),
     )
+    for key in ("velocity_limits", "acceleration_limits"):
+        bad = sorted(set(getattr(spec, key)) - set(spec.actuated_joints) - {"default"})
+        if bad:
+            raise ConfigError(f"{path}: {key} names unknown joints {bad} (joints or 'default')")
     missing_tau = sorted(set(spec.actuated_joints) - set(spec.torque_limits))
     if missing_tau:
         raise ConfigError(f"{path}: torque_limits missing for {missing_tau}")

@@ -168,10 +168,11 @@ class GazeControllerNode(Node):
                               neck_traj_time=neck_traj_time)
         wait = self.node_config.subscriber_timeout
         note = subscriber_note(wait_for_subscribers(self.traj_pub, wait), wait)
-        # the joint states went on while planning: send the plan from the current time
-        late = max(0.0, self._listener.latest().t - now)
-        t, q, qd = plan.command(since=late)
-        traj = arrays_to_trajectory(plan.joint_names, t, q, qd, stamp=sec_to_time(now + late))
+        # the whole plan from its start sample (t = 0: the controller does not join it from
+        # its set-point, whose velocity may differ); its stamp (the planning time, now in the
+        # past when it arrives) makes the controller start it at once
+        traj = arrays_to_trajectory(plan.joint_names, plan.t, plan.q, plan.qd,
+                                    stamp=sec_to_time(now))
         self.traj_pub.publish(traj)
         self.target_pub.publish(self._point(plan.solution.target, now))
         active = _Active(now, plan, traj)

@@ -50,8 +50,8 @@ def arm_prefix(spec: RobotSpec, arm: str) -> str:
 def _urdf_hulls(model_name: str, prefix: str, links: tuple[str, ...], spacing: float
                 ) -> tuple[LinkHull, ...]:
     """Hulls of the collision meshes of ``prefix + link`` in the URDF (link frames)."""
-    from icub_sim_bridge.tri_mesh import TriMesh
-    from icub_sim_bridge.urdf_robot import UrdfRobot
+    from icub_pmp.kinematics.tri_mesh import TriMesh
+    from icub_pmp.kinematics.urdf_robot import UrdfRobot
 
     path = urdf_path(model_name)
     urdf = UrdfRobot(path)
