@@ -95,6 +95,24 @@ def test_rosbags_computes_the_published_hash_of_every_channel_type(defs):
     assert ReaderCheck(topics).rosbags() == []
 
 
+def test_every_project_interface_is_read_as_expected(defs):
+    """Every message, service event and action feedback type of icub_interfaces (today's and
+    any added later): rosbags resolves each with the published hash; the MCAP ROS 2 decoder
+    decodes every message type and rejects exactly the event and feedback types."""
+    from icub_pmp.config import repo_root
+
+    root = repo_root() / "icub_interfaces"
+    types = [f"icub_interfaces/msg/{p.stem}" for p in sorted((root / "msg").glob("*.msg"))]
+    types += [f"icub_interfaces/srv/{p.stem}_Event" for p in sorted((root / "srv").glob("*.srv"))]
+    types += [f"icub_interfaces/action/{p.stem}_FeedbackMessage"
+              for p in sorted((root / "action").glob("*.action"))]
+    topics = [_topic(defs, f"/t{k}", t) for k, t in enumerate(types)]
+    check = ReaderCheck(topics)
+    assert check.rosbags() == []
+    rejected = {u.msgtype for t in topics if (u := check.mcap_ros2(t)) is not None}
+    assert rejected == {t for t in types if "/msg/" not in t}
+
+
 def test_service_events_are_ros2idl_with_the_rosidl_event_layout(defs):
     """The service-event definition is rosbag2's IDL layout (one 'IDL: name' block per type,
     no preprocessor lines), and rosbags decodes a recorded event with it."""
@@ -293,7 +311,8 @@ def test_convert_refuses_to_overwrite_its_input(defs, tmp_path):
 # ---------------------------------------------------------------------- CLI
 def test_info_warns_one_line_per_unreadable_channel(defs, tmp_path, capsys):
     """`icub bag info` on an older bag: one Warning line for the service-event channel
-    naming both readers, and how to get a readable copy; none for a converted bag."""
+    naming both readers, and how to get a readable copy; none for a converted bag. `convert
+    --all-services` keeps every topic and the events."""
     _old_bag(tmp_path / "old", defs)
     assert main(["bag", "info", str(tmp_path / "old")]) == 0
     out = capsys.readouterr().out
@@ -306,6 +325,10 @@ def test_info_warns_one_line_per_unreadable_channel(defs, tmp_path, capsys):
     assert "left out (not selected): /pmp/reach/_service_event" in capsys.readouterr().out
     assert main(["bag", "info", str(tmp_path / "new")]) == 0
     assert "Warning" not in capsys.readouterr().out
+    assert main(["bag", "convert", str(tmp_path / "old"), "-o", str(tmp_path / "events"),
+                 "--all-services"]) == 0  # every topic, and the events
+    counts = {t.name: t.count for t in BagReader(tmp_path / "events").info().topics}
+    assert counts == {"/joint_states": 5, "/pmp/reach/_service_event": 2}
 
 
 def test_record_without_a_selection_is_a_one_line_error(capsys):

@@ -95,9 +95,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     i.set_defaults(func=run_info)
 
     c = bag.add_parser("convert", help="rewrite a bag with today's schemas (fixes older bags)",
-                       epilog="Without topic options every topic is kept; service events and "
-                              "action topics only with --all-services / --all-actions (see "
-                              "`icub bag record --help`).",
+                       epilog="Every topic is kept unless topics are named; service events "
+                              "and action topics only with --all-services / --services, "
+                              "--all-actions / --actions (see `icub bag record --help`).",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     c.add_argument("bag", help="bag directory (or .mcap file) to read")
     c.add_argument("-o", "--output", required=True, help="bag directory to create")
@@ -133,8 +133,7 @@ def _selection(args: argparse.Namespace, default_all: bool = False) -> RecordSel
     topics = list(args.topics) + list(args.topic_list)
     if args.all and topics:
         raise ValueError("give either topics or --all, not both")
-    everything = args.all or (default_all and not (
-        topics or args.all_services or args.services or args.all_actions or args.actions))
+    everything = args.all or (default_all and not topics)
     return RecordSelection(
         topics=tuple(topics), all_topics=everything, services=tuple(args.services),
         all_services=args.all_services, actions=tuple(args.actions),
