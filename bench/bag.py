@@ -4,8 +4,8 @@
     scripts/env.sh python bench/bag.py                  # 60 s of traffic
     scripts/env.sh python bench/bag.py --quick --compression zstd
 
-In a private ROS_DOMAIN_ID: ``icub bag record --all`` runs as its own process while
-``icub_pmp.testing.bag_traffic`` publishes what the simulator will (``/clock``,
+In a private ROS_DOMAIN_ID: ``icub bag record --all --all-services`` runs as its own process
+while ``icub_pmp.testing.bag_traffic`` publishes what the simulator will (``/clock``,
 ``/joint_states`` and four FT wrenches at 1 kHz best effort, two 320x240 rgb8 cameras at
 30 Hz, trajectories and introspected ``/pmp/reach`` calls at 2 Hz). Then the bag is replayed
 at rate 1 by ``icub bag play`` while a second recorder records the replay. Figures:
@@ -51,7 +51,8 @@ def _json(proc: NodeProcess, key: str) -> dict:
 
 def _recorder(bag: Path, env: dict, compression: str) -> NodeProcess:
     rec = NodeProcess(command=[ENV, "icub", "bag", "record", "--json", "-o", str(bag), "--all",
-                               "--exclude", EXCLUDE, "--compression", compression], env=env)
+                               "--all-services", "--exclude", EXCLUDE, "--compression",
+                               compression], env=env)
     if not rec.wait_for_output("recording to", 60):
         raise RuntimeError(rec.output())
     return rec

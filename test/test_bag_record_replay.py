@@ -21,7 +21,7 @@ from sensor_msgs.msg import Image, JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.srv import Reach_Event
-from icub_pmp.bags import BagReader, BagStatus
+from icub_pmp.bags import BagReader, BagStatus, ReaderCheck
 from icub_pmp.testing import NodeProcess, repo_root
 
 SCRIPTS = repo_root() / "scripts"
@@ -80,12 +80,13 @@ def _decoded(bag: Path) -> dict[str, list]:
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory, ros_domain_id):
-    """2 s of full-rate traffic recorded with `record.sh --all`, stopped by SIGINT. The
+    """2 s of full-rate traffic recorded with `record.sh --all --all-services` (the reach
+    service's events too), stopped by SIGINT. The
     traffic is reliable (depth 1000) so that DDS cannot drop on this shared, overloaded
     machine: any count mismatch is the recorder's. bench/bag.py measures the graph's
     best-effort QoS."""
     bag = tmp_path_factory.mktemp("rec") / "run"
-    rec = _record(bag, "--all", *EXCLUDE)
+    rec = _record(bag, "--all", "--all-services", *EXCLUDE)
     traffic = _traffic("--duration", "2", "--reliable")
     assert traffic.proc.wait(120) == 0, traffic.output()
     published = _json_line(traffic, "published")["published"]
@@ -171,29 +172,23 @@ def test_recorded_content_and_order(recorded):
 
 def test_recorded_bag_opens_with_official_mcap_readers(recorded):
     """The official mcap + mcap-ros2-support readers open the recorded bag from its index and
-    decode every message (service-event channels are read raw: that decoder's rosidl parser
-    rejects the generated '_Event' type names)."""
+    decode every message of every channel but the service events, the one channel ReaderCheck
+    flags (that decoder's rosidl rules reject the '_Event' type name)."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
     bag = recorded[0]
     info = BagReader(bag).info()
+    flagged = {u.topic for u in ReaderCheck(info.topics).unreadable()}
+    assert flagged == {"/pmp/reach/_service_event"}
     (mcap_file,) = bag.glob("*.mcap")
-    decoded = raw_events = 0
     with open(mcap_file, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
         assert reader.get_summary().statistics.message_count == info.message_count
-        factory = DecoderFactory()
-        decoders = {}
-        for schema, channel, message in reader.iter_messages():
-            if schema.name.endswith("_Event"):
-                raw_events += 1
-                continue
-            if schema.id not in decoders:
-                decoders[schema.id] = factory.decoder_for(channel.message_encoding, schema)
-            decoders[schema.id](message.data)
-            decoded += 1
-    assert decoded + raw_events == info.message_count and decoded > 10_000
+        others = [t.name for t in info.topics if t.name not in flagged]
+        decoded = sum(1 for _ in reader.iter_decoded_messages(topics=others))
+    events = info.topic("/pmp/reach/_service_event").count
+    assert decoded + events == info.message_count and decoded > 10_000
 
 
 def test_bag_metadata_has_offered_qos(recorded):
@@ -210,7 +205,7 @@ def test_replay_reproduces_the_stream(recorded, tmp_path):
     order (recorded again by a second recorder)."""
     bag = recorded[0]
     again = tmp_path / "again"
-    rec = _record(again, "--all", *EXCLUDE)
+    rec = _record(again, "--all", "--all-services", *EXCLUDE)
     play = NodeProcess(command=[str(SCRIPTS / "replay.sh"), str(bag),
                                 "--wait-for-subscribers", "30", "--json"])
     assert play.proc.wait(120) == 0, play.output()

@@ -1,10 +1,11 @@
 """BagWriter: a rosbag2 bag (``metadata.yaml`` + one ``.mcap``) written with ``rosbags``.
 
 The layout is what ``ros2 bag record -s mcap`` writes: a directory holding ``metadata.yaml``
-(rosbag2 format version 9) and an MCAP file of CDR messages with ``ros2msg`` schemas and each
-topic's offered QoS profiles in the channel metadata, so a stock ``ros2 bag play``, Foxglove and
-the official ``mcap`` readers open it. Nothing is serialised here: messages arrive as the CDR
-bytes taken off the wire.
+(rosbag2 format version 9) and an MCAP file of CDR messages with the schemas of
+:class:`MessageDefinitions`, each topic's RIHS01 type hash and its offered QoS profiles, so a
+stock ``ros2 bag play``, rosbags, Foxglove and the official ``mcap`` readers open it (which
+channel which reader decodes: :class:`ReaderCheck`). Nothing is serialised here: messages
+arrive as the CDR bytes taken off the wire.
 
 Crash safety: rosbags writes a chunk to the file every 1 MiB; this class also closes the
 pending chunk every ``flush_interval`` seconds and flushes the file after every chunk, so
@@ -117,11 +118,12 @@ class BagWriter:
         type_hash: str | None = None,
         msgdef: str | None = None,
     ) -> TopicHandle:
-        """Add ``topic`` of ``msgtype`` ('pkg/msg/Type') with its publishers' offered QoS.
+        """Add ``topic`` of ``msgtype`` ('pkg/kind/Type') with its publishers' offered QoS.
 
-        ``type_hash``: the RIHS01 hash seen on the graph (default: computed by rosbags for
-        standard types, else empty). ``msgdef``: the complete ros2msg definition (default:
-        from :class:`MessageDefinitions`).
+        ``type_hash``: the RIHS01 hash seen on the graph (default: from the installed type
+        description files, see :meth:`MessageDefinitions.type_hash`). ``msgdef``: the complete
+        definition, ``ros2msg`` or rosbag2's ``ros2idl`` layout (default: from
+        :class:`MessageDefinitions`).
         """
         self._check_open()
         if topic in self._topics:
@@ -129,7 +131,7 @@ class BagWriter:
         if msgdef is None:
             msgdef = self.definitions.definition(msgtype)
         if not type_hash:
-            type_hash = _standard_hash(msgtype)
+            type_hash = self.definitions.type_hash(msgtype)
         try:
             conn = self._writer.add_connection(
                 topic,
@@ -209,19 +211,3 @@ class BagWriter:
     def __exit__(self, *exc: object) -> None:
         if not self._closed:
             self.close()
-
-
-def _standard_hash(msgtype: str) -> str:
-    """RIHS01 hash of a standard Jazzy type from the rosbags type store ('' if unknown)."""
-    from rosbags.typesys import Stores, get_typestore
-
-    global _TYPESTORE
-    if _TYPESTORE is None:
-        _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
-    try:
-        return _TYPESTORE.hash_rihs01(msgtype)
-    except Exception:  # rosbags raises TypesysError/KeyError for unknown types
-        return ""
-
-
-_TYPESTORE = None

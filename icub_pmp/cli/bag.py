@@ -1,12 +1,16 @@
-"""``icub bag record|play|info``: MCAP bags in the rosbag2 layout (what ``ros2 bag`` does).
+"""``icub bag record|play|info|convert``: MCAP bags in the rosbag2 layout (``ros2 bag``).
 
-    icub bag record -o DIR [TOPICS...|--all] [--exclude RE] [--compression zstd]
+    icub bag record -o DIR [TOPICS...|--all] [--all-services|--services S ...]
+                    [--all-actions|--actions A ...] [--exclude RE] [--compression zstd]
     icub bag play DIR [--rate R] [--clock [HZ]] [--topics T ...] [--wait-for-subscribers]
     icub bag info DIR [--check]
+    icub bag convert DIR -o NEW [the record options; default: every topic]
 
 Ctrl-C (or SIGTERM) ends a recording and finalises the bag. A bag whose recording was killed
 is still readable up to its last flushed chunk; ``info`` says it was not closed cleanly and
-``play`` replays what is readable. A damaged bag gives one ``icub: error:`` line.
+``play`` replays what is readable. ``info`` names every channel a common reader (rosbags, the
+official MCAP ROS 2 decoder) cannot decode; ``convert`` writes a copy of an older bag that they
+all read. A damaged bag gives one ``icub: error:`` line.
 """
 
 from __future__ import annotations
@@ -16,23 +20,44 @@ import datetime
 import json
 import sys
 
-from icub_pmp.bags import COMPRESSIONS, BagInfo, BagReader, BagStatus
+from icub_pmp.bags import (
+    COMPRESSIONS,
+    MCAP_ROS2,
+    ROSBAGS,
+    BagInfo,
+    BagReader,
+    BagStatus,
+    ReaderCheck,
+    RecordSelection,
+    UnreadableChannel,
+)
 
-__all__ = ["register", "run_record", "run_play", "run_info", "format_info"]
+__all__ = ["register", "run_record", "run_play", "run_info", "run_convert", "format_info",
+           "format_unreadable"]
+
+RECORD_EPILOG = """\
+What is recorded: the topics named, or with --all every topic (hidden ones, whose names have a
+part starting with "_", only with --include-hidden-topics). Service calls (from
+<service>/_service_event, the server must enable introspection) need --all-services or
+--services; actions (<action>/_action/status and /feedback) need --all-actions or --actions.
+Unlike `ros2 bag record -a`, --all records no service events: the official MCAP ROS 2
+decoder (mcap-ros2-support, what many tools use) cannot decode service-event types
+(pkg/srv/Name_Event) nor action feedback (pkg/action/Name_FeedbackMessage), and stops at the
+first such message, so the default bag holds none; rosbags reads them. `icub bag info` warns
+about such channels."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add the ``bag`` subcommand with ``record``, ``play`` and ``info``."""
-    p = sub.add_parser("bag", help="record, replay and inspect MCAP bags (rosbag2 layout)")
-    bag = p.add_subparsers(dest="bag_command", metavar="{record,play,info}")
+    """Add the ``bag`` subcommand with ``record``, ``play``, ``info`` and ``convert``."""
+    p = sub.add_parser("bag", help="record, replay, inspect and convert MCAP bags (rosbag2 "
+                                   "layout)")
+    bag = p.add_subparsers(dest="bag_command", metavar="{record,play,info,convert}")
     p.set_defaults(func=lambda _a: (p.print_help(), 2)[1])
 
-    r = bag.add_parser("record", help="record topics into a new bag directory")
-    r.add_argument("topics", nargs="*", help="topics to record (or --all)")
+    r = bag.add_parser("record", help="record topics into a new bag directory",
+                       epilog=RECORD_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     r.add_argument("-o", "--output", help="bag directory to create (default: bags/<time>)")
-    r.add_argument("-a", "--all", action="store_true",
-                   help="record every topic, including service request events")
-    r.add_argument("-e", "--exclude", help="regular expression of topics not to record")
+    _add_selection(r)
     r.add_argument("--compression", choices=COMPRESSIONS, default="none",
                    help="MCAP chunk compression (default: none)")
     r.add_argument("--qos-depth", type=int, default=1000,
@@ -69,21 +94,63 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="read every chunk (default: a finalised bag is read from its index)")
     i.set_defaults(func=run_info)
 
+    c = bag.add_parser("convert", help="rewrite a bag with today's schemas (fixes older bags)",
+                       epilog="Every topic is kept unless topics are named; service events "
+                              "and action topics only with --all-services / --services, "
+                              "--all-actions / --actions (see `icub bag record --help`).",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    c.add_argument("bag", help="bag directory (or .mcap file) to read")
+    c.add_argument("-o", "--output", required=True, help="bag directory to create")
+    _add_selection(c)
+    c.add_argument("--compression", choices=COMPRESSIONS, default="none",
+                   help="MCAP chunk compression (default: none)")
+    c.set_defaults(func=run_convert)
+
+
+def _add_selection(p: argparse.ArgumentParser) -> None:
+    """The channel options of ``ros2 bag record`` (see RECORD_EPILOG)."""
+    g = p.add_argument_group("what to record")
+    g.add_argument("topics", nargs="*", help="topics to record (or --all)")
+    g.add_argument("--topics", dest="topic_list", nargs="+", default=[], metavar="TOPIC",
+                   help="topics to record (the same as naming them)")
+    g.add_argument("-a", "--all", "--all-topics", dest="all", action="store_true",
+                   help="every topic (no service events: see below)")
+    g.add_argument("--all-services", action="store_true",
+                   help="every service with introspection, from <service>/_service_event")
+    g.add_argument("--services", nargs="+", default=[], metavar="SERVICE",
+                   help="these services (their <service>/_service_event topics)")
+    g.add_argument("--all-actions", action="store_true",
+                   help="every action's <action>/_action/status and /feedback")
+    g.add_argument("--actions", nargs="+", default=[], metavar="ACTION",
+                   help="these actions' status and feedback topics")
+    g.add_argument("--include-hidden-topics", action="store_true",
+                   help="with --all, also hidden topics (a name part starting with '_')")
+    g.add_argument("-e", "--exclude", "--exclude-regex", dest="exclude", default="",
+                   help="regular expression of topics not to record")
+
+
+def _selection(args: argparse.Namespace, default_all: bool = False) -> RecordSelection:
+    topics = list(args.topics) + list(args.topic_list)
+    if args.all and topics:
+        raise ValueError("give either topics or --all, not both")
+    everything = args.all or (default_all and not topics)
+    return RecordSelection(
+        topics=tuple(topics), all_topics=everything, services=tuple(args.services),
+        all_services=args.all_services, actions=tuple(args.actions),
+        all_actions=args.all_actions, include_hidden_topics=args.include_hidden_topics,
+        exclude=args.exclude)
+
 
 # ---------------------------------------------------------------------- record
 def run_record(args: argparse.Namespace) -> int:
     """Record until Ctrl-C / SIGTERM / --duration; print per-topic counts."""
     from icub_pmp.ros.bag_recorder import format_result, record
 
-    if not args.all and not args.topics:
-        raise ValueError("name the topics to record, or use --all")
-    if args.all and args.topics:
-        raise ValueError("give either topics or --all, not both")
+    selection = _selection(args)
     out = args.output or f"bags/{datetime.datetime.now():%Y-%m-%d_%H-%M-%S}"
     result = record(
         out,
-        None if args.all else args.topics,
-        exclude=args.exclude,
+        selection,
         compression=args.compression,
         qos_depth=args.qos_depth,
         use_sim_time=args.use_sim_time,
@@ -132,7 +199,48 @@ def run_info(args: argparse.Namespace) -> int:
     """Print the summary; exit 1 if the bag is truncated (0 if finalised or only unclosed)."""
     info = BagReader(args.bag).info(check=args.check)
     print(format_info(info), flush=True)
+    unreadable = ReaderCheck(info.topics).unreadable()
+    if unreadable:
+        print(format_unreadable(unreadable, args.bag), flush=True)
     return 1 if info.status == BagStatus.TRUNCATED else 0
+
+
+def format_unreadable(unreadable: tuple[UnreadableChannel, ...], bag: str) -> str:
+    """One ``Warning:`` line per channel a common reader cannot decode, and what to do."""
+    by_topic: dict[str, list[UnreadableChannel]] = {}
+    for u in unreadable:
+        by_topic.setdefault(u.topic, []).append(u)
+    lines = [f"Warning: {topic} [{us[0].msgtype}]: "
+             + "; ".join(f"{u.reader} cannot decode it ({u.reason})" for u in us)
+             for topic, us in by_topic.items()]
+    readers = {u.reader for u in unreadable}
+    what = []
+    if MCAP_ROS2 in readers:
+        what.append("the MCAP ROS 2 decoder raises at the first message of such a channel "
+                    "(name the other topics to read them)")
+    if ROSBAGS in readers:
+        what.append("rosbags' AnyReader refuses the whole bag")
+    lines.append(f"Note: {' and '.join(what)}; `icub bag convert {bag} -o NEW` writes a copy "
+                 "without these channels")
+    return "\n".join(lines)
+
+
+def run_convert(args: argparse.Namespace) -> int:
+    """Rewrite the bag; print what was kept, dropped and left with its recorded schema."""
+    from icub_pmp.bags import BagConverter
+
+    result = BagConverter(args.bag, args.output, _selection(args, default_all=True),
+                          compression=args.compression).run()
+    st = result.stats
+    for topic, n in sorted(st.counts.items()):
+        print(f"  {topic}: {n}", flush=True)
+    for topic, why in sorted(result.kept_recorded_schema.items()):
+        print(f"note: {topic} keeps its recorded schema: {why}", flush=True)
+    if result.dropped:
+        print(f"left out (not selected): {', '.join(result.dropped)}", flush=True)
+    print(f"wrote {st.total} messages on {len(st.counts)} topics to {st.path} "
+          f"({st.bytes_written / 1e6:.1f} MB)", flush=True)
+    return 0
 
 
 def format_info(info: BagInfo) -> str:

@@ -4,7 +4,7 @@
     icub echo TOPIC [--count N]    print messages
     icub hz TOPIC                  measure a topic's rate
     icub reach right=X,Y,Z ...     send a PMP reach goal to /pmp/reach
-    icub bag record|play|info      MCAP bags (rosbag2 layout)
+    icub bag record|play|info|convert   MCAP bags (rosbag2 layout)
 
 Each subcommand lives in its own module exposing ``register(subparsers)``; its parser sets
 ``func(args) -> int``. Errors print one line ``icub: error: ...`` and exit non-zero.

@@ -6,20 +6,21 @@ subscription of the type the graph reports (messages stay CDR bytes, nothing is 
 and a QoS matching its publishers (reliable only if all are; transient local only if all are,
 so latched topics such as ``/robot_description`` are recorded), with a deep history
 (``qos_depth``) so bursts are buffered instead of dropped. Each message is written with its
-receive time (wall clock, or the ROS clock with ``use_sim_time``). Service requests are
-recorded from the service-introspection topics ``<service>/_service_event`` (hidden topics
-are otherwise skipped, like rosbag2). Run it with :func:`record` (EventsExecutor; SIGINT and
-SIGTERM finalise the bag).
+receive time (wall clock, or the ROS clock with ``use_sim_time``). What is recorded is a
+:class:`~icub_pmp.bags.RecordSelection` (``ros2 bag record``'s topic, service, hidden-topic and
+action options): service calls come from the introspection topics ``<service>/_service_event``,
+actions from ``<action>/_action/{status,feedback}``, and neither is in the default bag (the
+official MCAP ROS 2 decoder cannot decode them). Run it with :func:`record` (EventsExecutor;
+SIGINT and SIGTERM finalise the bag).
 """
 
 from __future__ import annotations
 
-import re
 import signal
 import sys
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable
 
 import rclpy
 from rclpy.clock import Clock, ClockType
@@ -40,12 +41,12 @@ from rosbags.interfaces import (
     QosTime,
 )
 
-from icub_pmp.bags import BagWriter, TopicHandle
+from icub_pmp.bags import BagWriter, RecordSelection, TopicHandle
 from icub_pmp.errors import BagError, IcubPmpError
 from icub_pmp.ros.msg_types import get_interface
 from icub_pmp.ros.qos import matching_qos
 
-__all__ = ["BagRecorder", "RecordResult", "record", "qos_to_rosbags", "is_service_event"]
+__all__ = ["BagRecorder", "RecordResult", "record", "qos_to_rosbags"]
 
 _INFINITE = QosTime(2147483647, 4294967295)  # how rosbag2 writes an infinite duration
 
@@ -72,15 +73,6 @@ def _qos_time(d: Duration) -> QosTime:
     return QosTime(ns // 1_000_000_000, ns % 1_000_000_000)
 
 
-def is_service_event(topic: str) -> bool:
-    """True for a service-introspection topic ``<service>/_service_event``."""
-    return topic.endswith("/_service_event")
-
-
-def _hidden(topic: str) -> bool:
-    return any(part.startswith("_") for part in topic.split("/"))
-
-
 @dataclass(frozen=True)
 class RecordResult:
     """What a recording wrote: messages received/written and DDS-reported losses per topic."""
@@ -100,18 +92,17 @@ class RecordResult:
 
 
 class BagRecorder(Node):
-    """Subscribe to ``topics`` (or all topics when ``topics`` is None) and write to ``writer``.
+    """Subscribe to the topics ``selection`` keeps, as they appear, and write to ``writer``.
 
-    ``exclude``: regular expression of topics never recorded. ``qos_depth``: history depth of
-    each subscription. ``log``: where progress lines go (default: stdout).
+    ``qos_depth``: history depth of each subscription. ``log``: where progress lines go
+    (default: stdout).
     """
 
     def __init__(
         self,
         writer: BagWriter,
-        topics: Sequence[str] | None = None,
+        selection: RecordSelection,
         *,
-        exclude: str | None = None,
         qos_depth: int = 1000,
         discovery_period: float = 0.2,
         use_sim_time: bool = False,
@@ -128,11 +119,7 @@ class BagRecorder(Node):
         if qos_depth < 1:
             raise BagError(f"qos depth must be >= 1, got {qos_depth}")
         self.writer = writer
-        self.requested = None if topics is None else [_absolute(t) for t in topics]
-        try:
-            self.exclude = re.compile(exclude) if exclude else None
-        except re.error as exc:
-            raise BagError(f"--exclude: bad regular expression {exclude!r}: {exc}") from None
+        self.selection = selection
         self.qos_depth = int(qos_depth)
         self.use_sim_time = use_sim_time
         self.received: dict[str, int] = {}
@@ -151,18 +138,10 @@ class BagRecorder(Node):
         self.discover()
 
     # ------------------------------------------------------------------ discovery
-    def wanted(self, topic: str) -> bool:
-        """Whether ``topic`` is to be recorded."""
-        if self.exclude is not None and self.exclude.search(topic):
-            return False
-        if self.requested is not None:
-            return topic in self.requested
-        return not _hidden(topic) or is_service_event(topic)
-
     def discover(self) -> None:
         """Subscribe to every wanted topic that has a publisher and is not yet recorded."""
         for topic, types in self.get_topic_names_and_types():
-            if topic in self._subs or topic in self._skipped or not self.wanted(topic):
+            if topic in self._subs or topic in self._skipped or not self.selection.wants(topic):
                 continue
             infos = self.get_publishers_info_by_topic(topic)
             if not infos or not types:
@@ -197,8 +176,8 @@ class BagRecorder(Node):
             self._log(f"recording {topic} [{msgtype}]")
 
     def missing(self) -> list[str]:
-        """Requested topics not yet subscribed (no publisher seen yet)."""
-        return [t for t in (self.requested or []) if t not in self._subs]
+        """Channels asked for by name not yet subscribed (no publisher seen yet)."""
+        return [t for t in self.selection.named_topics() if t not in self._subs]
 
     @property
     def subscribed(self) -> list[str]:
@@ -243,10 +222,6 @@ class BagRecorder(Node):
             self.destroy_subscription(sub)
 
 
-def _absolute(topic: str) -> str:
-    return topic if topic.startswith("/") else "/" + topic
-
-
 def _hash_text(info: Any) -> str:
     h = getattr(info, "topic_type_hash", None)
     if h is None:
@@ -257,9 +232,8 @@ def _hash_text(info: Any) -> str:
 
 def record(
     path: str,
-    topics: Sequence[str] | None,
+    selection: RecordSelection,
     *,
-    exclude: str | None = None,
     compression: str = "none",
     qos_depth: int = 1000,
     use_sim_time: bool = False,
@@ -273,7 +247,8 @@ def record(
 ) -> RecordResult:
     """Record until SIGINT/SIGTERM (or ``duration`` s), then finalise the bag at ``path``.
 
-    ``max_wait`` > 0: fail if a requested topic has no publisher after that many seconds.
+    ``max_wait`` > 0: fail if a channel named in ``selection`` has no publisher after that
+    many seconds.
     ``drain``: after the stop, keep writing what already arrived for at most this long [s].
     """
     from rclpy.experimental import EventsExecutor
@@ -297,7 +272,7 @@ def record(
     recorder: BagRecorder | None = None
     try:
         recorder = BagRecorder(
-            writer, topics, exclude=exclude, qos_depth=qos_depth, use_sim_time=use_sim_time,
+            writer, selection, qos_depth=qos_depth, use_sim_time=use_sim_time,
             context=ctx, log=log,
         )
         executor = EventsExecutor(context=ctx)
@@ -372,4 +347,4 @@ def format_result(result: RecordResult, topics: Iterable[str] | None = None) -> 
 
 
 if __name__ == "__main__":  # pragma: no cover - use `icub bag record`
-    sys.exit("use: icub bag record -o DIR [TOPICS...|--all]")
+    sys.exit("use: icub bag record -o DIR [TOPICS...|--all] [--all-services] [--all-actions]")

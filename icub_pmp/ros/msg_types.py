@@ -11,8 +11,15 @@ from icub_pmp.errors import InvalidInput
 __all__ = ["get_interface", "type_name", "message_to_dict"]
 
 
+# Message types generated inside an action, as rclpy exposes them on the action class.
+_ACTION_PARTS = {"_FeedbackMessage": ("Impl", "FeedbackMessage"), "_Goal": ("Goal",),
+                 "_Result": ("Result",), "_Feedback": ("Feedback",)}
+
+
 def get_interface(name: str) -> Any:
-    """Import the class for 'pkg/msg/Type', 'pkg/srv/Type' or 'pkg/Type' (msg assumed)."""
+    """Import the class for 'pkg/msg/Type', 'pkg/srv/Type', 'pkg/action/Type' or 'pkg/Type'
+    (msg assumed); action parts such as 'pkg/action/Name_FeedbackMessage' (the type of
+    ``<action>/_action/feedback``) included."""
     parts = name.strip().split("/")
     if len(parts) == 2:
         parts = [parts[0], "msg", parts[1]]
@@ -21,9 +28,18 @@ def get_interface(name: str) -> Any:
     pkg, kind, cls = parts
     try:
         module = importlib.import_module(f"{pkg}.{kind}")
-        return getattr(module, cls)
-    except (ImportError, AttributeError):
+    except ImportError:
         raise InvalidInput(f"interface type {name!r} is not installed") from None
+    if hasattr(module, cls):
+        return getattr(module, cls)
+    if kind == "action":
+        for suffix, path in _ACTION_PARTS.items():
+            if cls.endswith(suffix) and hasattr(module, cls[: -len(suffix)]):
+                obj = getattr(module, cls[: -len(suffix)])
+                for attr in path:
+                    obj = getattr(obj, attr)
+                return obj
+    raise InvalidInput(f"interface type {name!r} is not installed")
 
 
 def type_name(msg_or_cls: Any) -> str:
