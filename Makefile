@@ -42,5 +42,9 @@ test: env
 demo: env
 	scripts/env.sh scripts/demo.sh
 
+# every benchmark's --quick run, one after the other, then BENCHMARKS.md rewritten
+bench: env
+	scripts/env.sh python bench/run_all.py
+
 clean:
 	rm -rf build install log

@@ -3,7 +3,9 @@
 A thin adapter over :class:`icub_sim_bridge.Simulator` (all physics there). Topics, services
 and frames:
 
-publishes  /clock (every step), /joint_states (every step: position [rad], velocity [rad/s],
+publishes  /clock (every ``clock_decimation`` steps: 100 Hz of simulated time by default, as
+           Gazebo publishes it at a low rate; /joint_states carries every step's stamp),
+           /joint_states (every step: position [rad], velocity [rad/s],
            effort = applied torque [N m], stamp = sim time), /ft/{l_arm_ft,r_arm_ft,l_leg_ft,
            r_leg_ft} (WrenchStamped every step, frame = the URDF FT frame, child_to_parent:
            the wrench the distal link exerts on the proximal one), /imu (head_imu_0),
@@ -77,8 +79,8 @@ from icub_sim_bridge.step_pacer import StepPacer
 __all__ = ["SimBridge", "main"]
 
 #: parameters that may change while running (the others shape the model: restart)
-_RUNTIME_PARAMS = {"mode", "real_time_factor", "lockstep_timeout", "imu_decimation",
-                   "ground_truth_decimation", "start_paused"}
+_RUNTIME_PARAMS = {"mode", "real_time_factor", "lockstep_timeout", "clock_decimation",
+                   "imu_decimation", "ground_truth_decimation", "start_paused"}
 _CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
@@ -351,8 +353,9 @@ class SimBridge(Node):
         sim = self.sim
         ns = int(round(sim.time * 1e9))
         self.lockstep.expect(ns)
-        _set_stamp(self._clock_msg.clock, ns)
-        self.pub_clock.publish(self._clock_msg)
+        if sim.steps % self.config.clock_decimation == 0:
+            _set_stamp(self._clock_msg.clock, ns)
+            self.pub_clock.publish(self._clock_msg)
         st = sim.joint_state()
         # serialised directly (raw_messages): the names are encoded once, not per message
         self.pub_js.publish(self._js_writer.write(ns, st.position, st.velocity, st.effort))

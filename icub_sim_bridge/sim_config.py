@@ -28,6 +28,7 @@ class SimConfig(ConfigBase):
     initial_posture: str = "rest"  # named posture of config/robot.yaml
     start_paused: bool = False
     # --- publishing -------------------------------------------------------------------------
+    clock_decimation: int = 10  # publish /clock every N steps (10: 100 Hz of simulated time)
     imu_decimation: int = 1  # publish the IMU every N steps
     ground_truth_decimation: int = 1  # publish ground-truth wrenches and object poses every N
     # --- cameras ----------------------------------------------------------------------------
@@ -72,8 +73,8 @@ class SimConfig(ConfigBase):
         if self.lockstep_timeout <= 0.0:
             raise ConfigError(f"SimConfig.lockstep_timeout: expected > 0 s, got "
                               f"{self.lockstep_timeout}")
-        for name in ("imu_decimation", "ground_truth_decimation", "camera_width",
-                     "camera_height"):
+        for name in ("clock_decimation", "imu_decimation", "ground_truth_decimation",
+                     "camera_width", "camera_height"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"SimConfig.{name}: expected >= 1, got {getattr(self, name)}")
         if self.camera_rate <= 0.0:

@@ -65,7 +65,8 @@ def _wait_up(probe, proc: NodeProcess) -> None:
 
 def test_joint_states_and_ft_every_step(bridge, ros_probe):
     """/joint_states (23 URDF joint names, position/velocity/effort) and /ft/l_arm_ft arrive
-    every 1 ms of simulated time (consecutive stamps 1 ms apart); /clock runs."""
+    every 1 ms of simulated time (consecutive stamps 1 ms apart); /clock runs, every
+    clock_decimation steps (10 ms of simulated time by default)."""
     _wait_up(ros_probe, bridge)
     js = ros_probe.collect("/joint_states", JointState, 200)
     assert len(js) == 200, bridge.output()[-2000:]
@@ -78,6 +79,7 @@ def test_joint_states_and_ft_every_step(bridge, ros_probe):
     assert np.median(np.diff([_ns(m.header.stamp) for m in ft])) == 1_000_000
     clock = ros_probe.collect("/clock", Clock, 20, qos=CLOCK_QOS)
     assert _ns(clock[-1].clock) > _ns(clock[0].clock)
+    assert np.all(np.diff([_ns(c.clock) for c in clock]) % 10_000_000 == 0)
     for topic, typ in (("/ft/r_arm_ft", WrenchStamped), ("/ft/l_leg_ft", WrenchStamped),
                        ("/ft/r_leg_ft", WrenchStamped), ("/imu", Imu),
                        ("/ground_truth/contact_wrench/left_hand", WrenchStamped),
