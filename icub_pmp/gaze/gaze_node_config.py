@@ -35,7 +35,7 @@ class GazeNodeConfig(ConfigBase):
     tracking_topic: str = "/motion/target"
     tracking_min_interval: float = 0.05
     fixation_rate: float = 30.0
-    subscriber_timeout: float = 1.0
+    subscriber_timeout: float = 5.0
     wait_timeout: float = 30.0
     motion_done_neck: float = math.radians(0.5)
     motion_done_eyes: float = math.radians(0.1)
