@@ -26,7 +26,6 @@ and wall time.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 from typing import Any
@@ -64,7 +63,7 @@ from icub_pmp.ros.conversions import (
     pose_to_arrays,
     validate_joint_state,
 )
-from icub_pmp.ros.goal_execution import GoalExecution
+from icub_pmp.ros.goal_execution import GoalExecution, arrival_config, end_goal
 from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 from icub_pmp.ros.node_runner import run_node
 from icub_pmp.ros.parameters import ConfigParameters
@@ -260,29 +259,14 @@ class CartesianSolverNode(Node):
             handle.publish_feedback(fb)
 
         def finish(outcome: str, message: str) -> GoToPoseAction.Result:
-            res.outcome, res.message, res.success = outcome, message, outcome == "reached"
-            if res.success:
-                handle.succeed()
-            elif outcome == "canceled" and handle.is_cancel_requested:
-                handle.canceled()
-            else:
-                handle.abort()
-            text = f"/cartesian/go_to_pose_action: {outcome}: {message}"
-            if res.success:
-                self.get_logger().info(text)
-            else:
-                self.get_logger().warning(text)
-            return res
+            return end_goal(self, handle, res, outcome, message, "/cartesian/go_to_pose_action")
 
         feedback("solving", {}, float(req.trajectory_time), 0.0)
         try:
             if self.joint_cache.latest() is None:
                 raise InvalidInput("no /joint_states received: the robot's posture is "
                                    "unknown, nothing can be executed")
-            tol = float(req.arrival_tolerance)
-            if not math.isfinite(tol) or tol < 0:
-                raise InvalidInput(f"arrival_tolerance: expected a finite distance >= 0 m "
-                                   f"(0 = default), got {tol}")
+            arrival = arrival_config(self.params.get(ArrivalConfig), req.arrival_tolerance)
             chain, position, _ = self._target(req)
             hand = "left" if "left" in chain else "right"
             solved = GoToPose.Response()
@@ -298,9 +282,6 @@ class CartesianSolverNode(Node):
         res.trajectory = msg
         res.trajectory_time_used = float(msg.points[-1].time_from_start.sec
                                          + msg.points[-1].time_from_start.nanosec * 1e-9)
-        arrival = self.params.get(ArrivalConfig)
-        if tol > 0:
-            arrival = dataclasses.replace(arrival, arrival_tolerance=tol)
         msg.header.stamp.sec, msg.header.stamp.nanosec = 0, 0  # start when accepted
         out = await self.execution.run(
             msg, {hand: position}, arrival, feedback, lambda: handle.is_cancel_requested,

@@ -63,7 +63,7 @@ from icub_pmp.ros.conversions import (
     positions_to_path,
     validate_joint_state,
 )
-from icub_pmp.ros.goal_execution import GoalExecution
+from icub_pmp.ros.goal_execution import GoalExecution, arrival_config, end_goal
 from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 from icub_pmp.ros.node_runner import run_node
 from icub_pmp.ros.parameters import ConfigParameters
@@ -272,20 +272,8 @@ class PmpPlannerNode(Node):
             handle.publish_feedback(fb)
 
         def finish(outcome: str, message: str) -> ReachAction.Result:
-            res.outcome, res.message = outcome, message
-            res.success = outcome == "reached"
-            if res.success:
-                handle.succeed()
-            elif outcome == "canceled" and handle.is_cancel_requested:
-                handle.canceled()
-            else:
-                handle.abort()
-            text = f"/pmp/reach_action {res.hands}: {outcome}: {message}"
-            if res.success:
-                self.get_logger().info(text)
-            else:
-                self.get_logger().warning(text)
-            return res
+            return end_goal(self, handle, res, outcome, message,
+                            f"/pmp/reach_action {res.hands}")
 
         feedback("planning", {}, float(req.tau), 0.0)
         try:
@@ -294,14 +282,7 @@ class PmpPlannerNode(Node):
                 raise InvalidInput("no /joint_states received: the robot's posture is "
                                    "unknown, nothing can be executed")
             goal = self._goal_of(req, dict(start))
-            tol = float(req.arrival_tolerance)
-            if not math.isfinite(tol) or tol < 0:
-                raise InvalidInput(f"arrival_tolerance: expected a finite distance >= 0 m "
-                                   f"(0 = default), got {tol}")
-            arrival = self.params.get(ArrivalConfig)
-            if tol > 0:
-                arrival = ArrivalConfig.from_dict({**arrival.to_dict(),
-                                                   "arrival_tolerance": tol})
+            arrival = arrival_config(self.params.get(ArrivalConfig), req.arrival_tolerance)
             plan = self.planner.plan(goal, start)
         except IcubPmpError as exc:
             return finish("rejected", str(exc))

@@ -21,6 +21,7 @@ wall-clock timer completes (no blocking, no extra threads).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from typing import Callable, Mapping, NamedTuple
@@ -35,9 +36,11 @@ from trajectory_msgs.msg import JointTrajectory
 from icub_interfaces.action import FollowJointTrajectory
 from icub_pmp.control.arrival_monitor import Arrival, ArrivalConfig, ArrivalMonitor
 from icub_pmp.control.trajectory_goal import GoalCode
+from icub_pmp.errors import InvalidInput
 from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 
-__all__ = ["GoalExecution", "ExecutionOutcome", "CONTROLLER_ACTION"]
+__all__ = ["GoalExecution", "ExecutionOutcome", "CONTROLLER_ACTION", "end_goal",
+           "arrival_config"]
 
 #: the impedance controller's trajectory-execution action
 CONTROLLER_ACTION = "/impedance_controller/follow_joint_trajectory"
@@ -239,6 +242,36 @@ class GoalExecution:
             return monitor.judge()
         except Exception:
             return None
+
+
+def end_goal(node: Node, handle, result, outcome: str, message: str, what: str):  # noqa: ANN001, ANN201
+    """End a Cartesian goal (its ``result`` has ``outcome``, ``message``, ``success``):
+    succeeded when ``outcome`` is 'reached', canceled when a cancel was asked, else aborted;
+    logged (``what``: the action and goal) and returned."""
+    result.outcome, result.message = outcome, message
+    result.success = outcome == "reached"
+    if result.success:
+        handle.succeed()
+    elif outcome == "canceled" and handle.is_cancel_requested:
+        handle.canceled()
+    else:
+        handle.abort()
+    text = f"{what}: {outcome}: {message}"
+    if result.success:
+        node.get_logger().info(text)
+    else:
+        node.get_logger().warning(text)
+    return result
+
+
+def arrival_config(base: ArrivalConfig, tolerance: float) -> ArrivalConfig:
+    """``base`` with a goal's ``arrival_tolerance`` [m] (0 = keep the base's); raises
+    InvalidInput on a negative or non-finite one."""
+    tol = float(tolerance)
+    if not math.isfinite(tol) or tol < 0:
+        raise InvalidInput(f"arrival_tolerance: expected a finite distance >= 0 m "
+                           f"(0 = default), got {tolerance}")
+    return dataclasses.replace(base, arrival_tolerance=tol) if tol > 0 else base
 
 
 def _duration(traj: JointTrajectory) -> float:
