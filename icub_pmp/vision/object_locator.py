@@ -214,7 +214,8 @@ class ObjectLocator:
         if not ok.any():
             raise ObjectNotFound("no_support", "no level support plane around the object")
         n, a = n[ok], a[ok]
-        counts = (np.abs((pts[None, :, :] - a[:, None, :]) @ n[:, :, None])[..., 0]
+        sub = pts[rng.choice(len(pts), size=min(len(pts), 1500), replace=False)]
+        counts = (np.abs((sub[None, :, :] - a[:, None, :]) @ n[:, :, None])[..., 0]
                   < c.plane_band).sum(axis=1)
         k = int(np.argmax(counts))
         p0, normal = a[k], n[k]
