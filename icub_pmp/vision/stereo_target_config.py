@@ -57,8 +57,8 @@ class StereoTargetConfig(ConfigBase):
         track_gate: a measurement farther than this from the predicted position is another
             object [m].
         still_speed: an object slower than this is still [m/s].
-        still_frames: frames without motion blobs after which a followed object is still and
-            is measured in its own region of the images [-].
+        still_frames: frames without a measurement after which a held target's velocity is
+            zeroed (nobody sees it move: it stays) [-].
         hold_time: a target without any measurement is dropped after this [s].
         switch_frames: frames another object must be measured, away from a followed one, to
             take over [-].
