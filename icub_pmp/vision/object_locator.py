@@ -193,7 +193,7 @@ class ObjectLocator:
         f = rl[y0:y1, x0:x1].astype(np.float32)
         mean = cv2.boxFilter(f, -1, (b, b))
         var = cv2.boxFilter(f * f, -1, (b, b)) - mean * mean
-        d[var < c.min_texture**2] = np.nan
+        d[var < c.stereo_min_texture**2] = np.nan
         return d
 
     def _support(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -30,8 +30,9 @@ class StereoTargetConfig(ConfigBase):
         max_depth: farthest accepted object [m].
         block_size: side of the block matching window (odd) [px].
         uniqueness_ratio: block matching uniqueness margin (OpenCV ``uniquenessRatio``) [%].
-        min_texture: blocks of the rectified left image with a smaller grey-level standard
-            deviation carry no disparity (untextured surfaces match anywhere) [grey level].
+        stereo_min_texture: blocks of the rectified left image with a smaller grey-level
+            standard deviation carry no disparity (untextured surfaces match anywhere)
+            [grey level].
         roi_margin: the search region is the seed's bounding box grown by this on each side,
             and by as much again while the object's pixels touch its border [px].
         max_object_height: points higher than this above the support are not an object's [m].
@@ -76,7 +77,7 @@ class StereoTargetConfig(ConfigBase):
     max_depth: float = 1.5
     block_size: int = 5
     uniqueness_ratio: int = 10
-    min_texture: float = 2.0
+    stereo_min_texture: float = 2.0
     roi_margin: int = 16
     max_object_height: float = 0.35
     plane_band: float = 0.006
@@ -117,8 +118,8 @@ class StereoTargetConfig(ConfigBase):
             raise bad("block_size", "an odd window side in 3..21 px")
         if not 0 <= self.uniqueness_ratio <= 50:
             raise bad("uniqueness_ratio", "0..50 %")
-        if self.min_texture < 0.0:
-            raise bad("min_texture", ">= 0 grey levels")
+        if self.stereo_min_texture < 0.0:
+            raise bad("stereo_min_texture", ">= 0 grey levels")
         if self.roi_margin < 0:
             raise bad("roi_margin", ">= 0 px")
         for f in ("plane_band", "min_object_height", "max_object_height", "top_band",
