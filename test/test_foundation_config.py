@@ -19,7 +19,7 @@ from icub_pmp.pmp import PmpConfig
 from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
 from icub_pmp.ros.pmp_node_config import PmpNodeConfig
 from icub_pmp.ros.robot_state_publisher_config import RobotStatePublisherConfig
-from icub_pmp.vision import MotionSegmenterConfig
+from icub_pmp.vision import MotionSegmenterConfig, StereoTargetConfig
 from icub_sim_bridge import SimConfig
 
 #: config/<node>.yaml -> the configuration classes the node declares as its parameters
@@ -27,7 +27,7 @@ NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
     "cartesian_solver": (IkConfig, MinJerkConfig, CartesianNodeConfig, ArrivalConfig),
     "gaze_controller": (GazeControllerConfig, GazeNodeConfig),
     "impedance_controller": (ImpedanceControllerConfig,),
-    "motion_segmenter": (MotionSegmenterConfig,),
+    "motion_segmenter": (MotionSegmenterConfig, StereoTargetConfig),
     "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig),
     "robot_state_publisher": (RobotStatePublisherConfig,),
     "sim_bridge": (SimConfig,),

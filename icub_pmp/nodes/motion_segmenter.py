@@ -4,47 +4,56 @@ A thin adapter over :mod:`icub_pmp.vision`:
 
 subscribes  /cam/left/image_raw, /cam/right/image_raw (sensor_msgs/Image rgb8/bgr8/mono8 of
             ``image_width`` x ``image_height``; others are dropped with a throttled warning),
-            /cam/left/camera_info, /cam/right/camera_info (intrinsics for triangulation;
-            until one arrives: fx = fy = 343.12, principal point at the image centre),
-            /joint_states (torso, neck and eye joints -> camera poses)
+            /cam/left/camera_info, /cam/right/camera_info (intrinsics; until one arrives:
+            fx = fy = 343.12, principal point at the image centre),
+            /joint_states (on a thread of its own, the last second kept: the head, eyes and
+            arms at each image's stamp)
 publishes   /motion/left/mask, /motion/right/mask (sensor_msgs/Image mono8, 255 = moving),
             /motion/left/blobs, /motion/right/blobs (icub_interfaces/MotionBlobs),
-            /motion/target (geometry_msgs/PointStamped in root_link): the largest blob tracked
-            in both eyes, triangulated with the current head/eye kinematics.
+            /motion/target (geometry_msgs/PointStamped in root_link): the centre of the object
+            the eyes follow, stamped with the images it is about, every stereo pair while
+            there is a target (:class:`~icub_pmp.vision.stereo_target.StereoTarget`: the
+            eyes' blobs paired, the object measured by stereo matching, tracked; an object
+            that stops is kept and measured in its own image region),
+            /motion/target/estimate (icub_interfaces/VisualTarget): the same with its
+            covariance, top face, size, velocity and state.
 
-Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig`
-(``config/motion_segmenter.yaml``); a change resets the segmenters.
+Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig` and of
+:class:`~icub_pmp.vision.StereoTargetConfig` (``config/motion_segmenter.yaml``); a change
+resets the segmenters and the target.
 """
 
 from __future__ import annotations
 
+import numpy as np
 from geometry_msgs.msg import PointStamped
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
-from sensor_msgs.msg import CameraInfo, Image, JointState, RegionOfInterest
+from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
 
 from icub_interfaces.msg import MotionBlob as MotionBlobMsg
 from icub_interfaces.msg import MotionBlobs as MotionBlobsMsg
+from icub_interfaces.msg import VisualTarget
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
 from icub_pmp.ros.conversions import (
     array_to_image,
     image_to_array,
-    joint_state_field,
+    sec_to_time,
     time_to_sec,
-    validate_joint_state,
 )
+from icub_pmp.ros.joint_state_cache import JointStateCache
 from icub_pmp.ros.node_runner import run_node
 from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.vision import (
     MotionBlobs,
     MotionSegmenter,
     MotionSegmenterConfig,
-    StereoTriangulator,
-    TargetTracker,
-    TrackedTarget,
+    StereoTarget,
+    StereoTargetConfig,
+    TrackedObject,
 )
-from icub_pmp.vision.head_cameras import HEAD_JOINTS, HeadCameras
+from icub_pmp.vision.head_cameras import HeadCameras
 
 __all__ = ["MotionSegmenterNode", "main", "blobs_to_msg"]
 
@@ -74,23 +83,21 @@ def blobs_to_msg(blobs: MotionBlobs, header, width: int, height: int) -> MotionB
 
 
 class MotionSegmenterNode(Node):
-    """Segment both eye images, publish masks, blobs and the triangulated target."""
+    """Segment both eye images, publish masks, blobs and the stereo target."""
 
     def __init__(self) -> None:
         super().__init__("motion_segmenter")
-        self.params = ConfigParameters(self, MotionSegmenterConfig,
+        self.params = ConfigParameters(self, (MotionSegmenterConfig, StereoTargetConfig),
                                        on_change=self._on_config_change)
-        self._reset(self.config)
-
         self.cameras = HeadCameras()
-        self._joints: dict[str, float] = {}
-        self._joint_stamp: float | None = None
+        self._reset(self.config)
         sd = qos_profile_sensor_data
         self.pub_mask = {s: self.create_publisher(Image, f"/motion/{s}/mask", sd) for s in SIDES}
         self.pub_blobs = {
             s: self.create_publisher(MotionBlobsMsg, f"/motion/{s}/blobs", 10) for s in SIDES
         }
         self.pub_target = self.create_publisher(PointStamped, "/motion/target", 10)
+        self.pub_estimate = self.create_publisher(VisualTarget, "/motion/target/estimate", 10)
         self.subs = [
             self.create_subscription(
                 Image, f"/cam/{s}/image_raw", lambda m, s=s: self._on_image(s, m), sd
@@ -103,36 +110,40 @@ class MotionSegmenterNode(Node):
             )
             for s in SIDES
         ]
-        self.sub_joints = self.create_subscription(
-            JointState, "/joint_states", self._on_joints, sd
-        )
+        self.joints = JointStateCache(self, history=1.0)
         c = self.config
         self.get_logger().info(
             f"motion_segmenter: {c.image_width}x{c.image_height}, grid step {c.grid_step} px, "
-            f"window {c.win_size}, theta_m {c.theta_m}"
+            f"window {c.win_size}, theta_m {c.theta_m}; stereo target: depth "
+            f"{self.stereo_config.min_depth}-{self.stereo_config.max_depth} m"
         )
 
     # ------------------------------------------------------------------ parameters
     @property
     def config(self) -> MotionSegmenterConfig:
-        """The current configuration (``config/motion_segmenter.yaml``, run-time changes)."""
-        return self.params.config
+        """The segmenter's configuration (``config/motion_segmenter.yaml``)."""
+        return self.params.get(MotionSegmenterConfig)
+
+    @property
+    def stereo_config(self) -> StereoTargetConfig:
+        """The stereo target's configuration."""
+        return self.params.get(StereoTargetConfig)
 
     def _reset(self, config: MotionSegmenterConfig) -> None:
-        """Fresh segmenters, trackers and default intrinsics for ``config``."""
+        """Fresh segmenters, target and default intrinsics for ``config``."""
         self.segmenters = {s: MotionSegmenter(config) for s in SIDES}
-        self.trackers = {s: TargetTracker(config) for s in SIDES}
         cam = CameraIntrinsics(width=config.image_width, height=config.image_height,
                                cx=config.image_width / 2.0, cy=config.image_height / 2.0)
         self.intrinsics = {s: cam for s in SIDES}
-        self._latest: dict[str, tuple[float, TrackedTarget] | None] = {s: None for s in SIDES}
+        self.target = StereoTarget(self.stereo_config, cam, cam)
+        self._latest: dict[str, tuple[float, np.ndarray, MotionBlobs] | None] = {
+            s: None for s in SIDES}
         self._paired_stamp: float | None = None
 
-    def _on_config_change(self, old: MotionSegmenterConfig, new: MotionSegmenterConfig,
-                          changed: frozenset[str]) -> None:
+    def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
         if new != old:
-            self._reset(new)
-            self.get_logger().info("parameters changed: segmenters reset")
+            self._reset(self.config)
+            self.get_logger().info("parameters changed: segmenters and target reset")
 
     # ------------------------------------------------------------------ callbacks
     def _on_info(self, side: str, msg: CameraInfo) -> None:
@@ -142,19 +153,12 @@ class MotionSegmenterNode(Node):
                 f"dropping /cam/{side}/camera_info: bad K {k}", throttle_duration_sec=5.0
             )
             return
-        self.intrinsics[side] = CameraIntrinsics(
-            width=int(msg.width), height=int(msg.height), fx=k[0], fy=k[4], cx=k[2], cy=k[5]
-        )
-
-    def _on_joints(self, msg: JointState) -> None:
-        try:
-            validate_joint_state(msg)
-        except IcubPmpError as exc:
-            self.get_logger().warn(f"dropping /joint_states: {exc}", throttle_duration_sec=5.0)
-            return
-        pos = joint_state_field(msg, "position")
-        self._joints.update({j: v for j, v in pos.items() if j in HEAD_JOINTS})
-        self._joint_stamp = time_to_sec(msg.header.stamp)
+        cam = CameraIntrinsics(width=int(msg.width), height=int(msg.height), fx=k[0], fy=k[4],
+                               cx=k[2], cy=k[5])
+        if cam != self.intrinsics[side]:
+            self.intrinsics[side] = cam
+            self.target.left, self.target.right = self.intrinsics["left"], \
+                self.intrinsics["right"]
 
     def _on_image(self, side: str, msg: Image) -> None:
         c = self.config
@@ -165,8 +169,8 @@ class MotionSegmenterNode(Node):
             self.get_logger().info(f"/cam/{side}: time went back {last[0]:.3f} -> {stamp:.3f} s,"
                                    " segmenter reset")
             self.segmenters[side].reset()
-            self.trackers[side].reset()
-            self._latest[side] = None
+            self.target.reset()
+            self._latest = {s: None for s in SIDES}
             self._paired_stamp = None
         try:
             img = image_to_array(msg, c.image_width, c.image_height)
@@ -176,53 +180,77 @@ class MotionSegmenterNode(Node):
                 f"dropping /cam/{side}/image_raw: {exc}", throttle_duration_sec=5.0
             )
             return
-        target = self.trackers[side].update(result)
         self.pub_mask[side].publish(
             array_to_image(result.mask, "mono8", msg.header.stamp, msg.header.frame_id)
         )
         self.pub_blobs[side].publish(
             blobs_to_msg(result, msg.header, c.image_width, c.image_height)
         )
-        self._latest[side] = (stamp, target)
-        self._triangulate(stamp, msg)
+        self._latest[side] = (stamp, img, result)
+        self._stereo(stamp)
 
-    def _triangulate(self, stamp: float, msg: Image) -> None:
-        c = self.config
+    def _stereo(self, stamp: float) -> None:
+        """Process the stereo pair of ``stamp`` once both images are there."""
+        sc = self.stereo_config
         left, right = self._latest["left"], self._latest["right"]
-        if left is None or right is None or abs(left[0] - right[0]) > c.stereo_sync_tolerance:
+        if left is None or right is None or abs(left[0] - right[0]) > sc.stereo_sync_tolerance:
             return
         if self._paired_stamp is not None and stamp <= self._paired_stamp:
             return
-        tl, tr = left[1], right[1]
-        if not (tl.valid and tr.valid and tl.missing_frames == 0 and tr.missing_frames == 0):
-            return
-        if self._joint_stamp is None:
-            self.get_logger().warn(
-                "no /joint_states yet: no 3-D target", throttle_duration_sec=5.0
-            )
-            return
-        if abs(stamp - self._joint_stamp) > c.joint_state_timeout:
-            self.get_logger().warn(
-                f"/joint_states {abs(stamp - self._joint_stamp):.3f} s away from the images: "
-                "no 3-D target", throttle_duration_sec=5.0,
-            )
-            return
         self._paired_stamp = max(left[0], right[0])
+        state = self.joints.at(left[0])
+        if state is None or abs(state.t - left[0]) > sc.joint_state_timeout:
+            age = "none" if state is None else f"{abs(state.t - left[0]):.3f} s away"
+            self.get_logger().warn(f"no /joint_states at the images' stamp ({age}): no 3-D "
+                                   "target", throttle_duration_sec=5.0)
+            return
         try:
-            poses = self.cameras.poses(self._joints)
-            p = StereoTriangulator(self.intrinsics["left"], self.intrinsics["right"]).triangulate(
-                tl.position, tr.position, poses.T_root_left, poses.T_root_right
-            )
+            poses = self.cameras.poses(state.positions)
+            segments = self._arm_segments(state.positions)
+            res = self.target.process(left[0], left[1], right[1], left[2], right[2], poses,
+                                      segments)
         except IcubPmpError as exc:
             self.get_logger().warn(f"no 3-D target: {exc}", throttle_duration_sec=5.0)
             return
-        if p.ray_gap > c.stereo_max_ray_gap or not 0.0 < p.depth_left <= c.max_target_depth:
-            return
+        if res.target.valid:
+            self._publish(res.target, res.source, 0 if res.measurement is None
+                          else res.measurement.n_points)
+
+    def _arm_segments(self, positions: dict[str, float]) -> np.ndarray:
+        """(4, 2, 3) elbow-wrist and wrist-hand segments of both arms in root_link [m]."""
+        model = self.cameras.model
+        q = model.q_from_dict({j: v for j, v in positions.items() if j in model.joint_names},
+                              np.zeros(model.nq))
+        out = []
+        for p in ("l", "r"):
+            e, w, h = (model.frame_position(q, f"{p}_{f}") for f in
+                       ("elbow_1", "wrist_1", "hand_dh_frame"))
+            out += [(e, w), (w, h)]
+        return np.array(out)
+
+    def _publish(self, t: TrackedObject, source: str, points: int) -> None:
+        stamp = sec_to_time(t.stamp)
         out = PointStamped()
-        out.header.stamp = msg.header.stamp
+        out.header.stamp = stamp
         out.header.frame_id = ROOT_FRAME
-        out.point.x, out.point.y, out.point.z = (float(v) for v in p.position)
+        out.point.x, out.point.y, out.point.z = (float(v) for v in t.position)
         self.pub_target.publish(out)
+        m = VisualTarget()
+        m.header = out.header
+        m.state, m.source = t.state, source
+        m.position = out.point
+        m.covariance = [float(v) for v in t.covariance.ravel()]
+        m.top.x, m.top.y, m.top.z = (float(v) for v in t.top)
+        m.velocity.x, m.velocity.y, m.velocity.z = (float(v) for v in t.velocity)
+        m.radius, m.height = float(t.radius), float(t.height)
+        m.last_measured = sec_to_time(t.last_measured)
+        m.points = int(points)
+        self.pub_estimate.publish(m)
+
+    def destroy_node(self) -> None:
+        """Stop the joint-state thread, then destroy the node."""
+        self.joints.close()
+        super().destroy_node()
 
 
 def main(args: list[str] | None = None) -> None:

@@ -12,8 +12,10 @@ with rclpy's default executor), keeps the serialised bytes of the newest sample,
 
 from __future__ import annotations
 
+import bisect
 import threading
 import time
+from collections import deque
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -25,7 +27,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 
 from icub_pmp.errors import IcubPmpError, InvalidInput
-from icub_pmp.ros.raw_messages import RawJointStateReader, read_joint_state
+from icub_pmp.ros.raw_messages import RawJointStateReader, raw_header_stamp_ns, read_joint_state
 
 __all__ = ["JointStateCache", "MeasuredState"]
 
@@ -43,11 +45,13 @@ class JointStateCache:
     """The newest good sample of ``topic`` for ``node`` (module doc).
 
     Malformed samples are skipped (the previous good one stays) and reported through
-    ``on_error`` (default: a throttled warning of ``node``).
+    ``on_error`` (default: a throttled warning of ``node``). With ``history`` > 0 the last
+    ``history`` seconds of samples (by stamp) are kept too, for :meth:`at`: the posture at the
+    time of another sensor's data (a camera image).
     """
 
     def __init__(self, node: Node, topic: str = "/joint_states",
-                 on_error: Callable[[str], None] | None = None):
+                 on_error: Callable[[str], None] | None = None, history: float = 0.0):
         self._on_error = on_error or (lambda text: node.get_logger().warning(
             text, throttle_duration_sec=5.0))
         self._reader = RawJointStateReader()
@@ -57,6 +61,9 @@ class JointStateCache:
         self._cached: MeasuredState | None = None
         self._bad_wall = -1.0
         self.count = 0
+        self._history_ns = int(history * 1e9)
+        self._stamps: deque[int] = deque()
+        self._samples: deque[bytes] = deque()
         self.node = Node(f"{node.get_name()}_joint_states", namespace=node.get_namespace(),
                          context=node.context, use_global_arguments=False)
         self.node.create_subscription(JointState, topic, self._on_data,
@@ -82,6 +89,39 @@ class JointStateCache:
         self._data = data
         self._wall = time.monotonic()
         self.count += 1
+        if self._history_ns > 0:
+            try:
+                ns = raw_header_stamp_ns(data)
+            except IcubPmpError:
+                return
+            with self._lock:
+                if self._stamps and ns < self._stamps[-1]:  # time went back: start afresh
+                    self._stamps.clear()
+                    self._samples.clear()
+                self._stamps.append(ns)
+                self._samples.append(data)
+                while self._stamps and self._stamps[0] < ns - self._history_ns:
+                    self._stamps.popleft()
+                    self._samples.popleft()
+
+    def at(self, t: float) -> MeasuredState | None:
+        """The kept sample whose stamp is nearest to ``t`` [s] (None without history or
+        samples; a malformed one is reported and None returned). Check ``abs(s.t - t)``."""
+        ns = int(round(t * 1e9))
+        with self._lock:
+            if not self._stamps:
+                return None
+            stamps = list(self._stamps)
+            k = bisect.bisect_left(stamps, ns)
+            k = min((i for i in (k - 1, k) if 0 <= i < len(stamps)),
+                    key=lambda i: abs(stamps[i] - ns))
+            try:
+                m = read_joint_state(self._reader, self._samples[k])
+            except IcubPmpError as exc:
+                self._on_error(f"/joint_states sample skipped: {exc}")
+                return None
+        return MeasuredState(m.stamp_ns * 1e-9, dict(zip(m.name, m.position.tolist())),
+                             time.monotonic())
 
     def latest(self) -> MeasuredState | None:
         """The newest good sample, or None before the first."""

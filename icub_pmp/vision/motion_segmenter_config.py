@@ -101,13 +101,9 @@ class MotionSegmenterConfig(ConfigBase):
         target_max_jump: a largest blob whose centroid is farther than this from the target
             needs ``target_switch_frames`` consecutive frames to take over [px].
         target_switch_frames: frames a distant largest blob must persist to become the target.
-        stereo_max_ray_gap: maximum distance between the two centroid rays (closest
-            approach) accepted for a 3-D target [m].
-        max_target_depth: 3-D targets farther than this from the left camera are rejected [m].
-        stereo_sync_tolerance: node only: left and right frames pair when their stamps differ
-            by at most this [s].
-        joint_state_timeout: node only: head/eye joint states older than this (relative to
-            the images) give no 3-D target [s].
+
+    The 3-D target (pairing the eyes' blobs, stereo measurement, tracking) has its own
+    parameters: :class:`~icub_pmp.vision.stereo_target_config.StereoTargetConfig`.
     """
 
     image_width: int = 320
@@ -146,10 +142,6 @@ class MotionSegmenterConfig(ConfigBase):
     target_hold_frames: int = 10
     target_max_jump: float = 60.0
     target_switch_frames: int = 3
-    stereo_max_ray_gap: float = 0.02
-    max_target_depth: float = 3.0
-    stereo_sync_tolerance: float = 0.02
-    joint_state_timeout: float = 0.5
 
     def validate(self) -> None:
         """Check ranges; raise :class:`ConfigError` naming the field."""
@@ -211,14 +203,6 @@ class MotionSegmenterConfig(ConfigBase):
             raise bad("target_max_jump", "> 0 px")
         if self.target_switch_frames < 1:
             raise bad("target_switch_frames", ">= 1 frame")
-        if self.stereo_max_ray_gap <= 0.0:
-            raise bad("stereo_max_ray_gap", "> 0 m")
-        if self.max_target_depth <= 0.0:
-            raise bad("max_target_depth", "> 0 m")
-        if self.stereo_sync_tolerance < 0.0:
-            raise bad("stereo_sync_tolerance", ">= 0 s")
-        if self.joint_state_timeout <= 0.0:
-            raise bad("joint_state_timeout", "> 0 s")
         if self.grid_shape[0] < 3 or self.grid_shape[1] < 3:
             raise ConfigError(
                 f"{name}: grid of {self.grid_shape} nodes is too small (grid_step "

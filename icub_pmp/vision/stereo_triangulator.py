@@ -99,6 +99,54 @@ class StereoTriangulator:
         zr = float(np.asarray(T_root_right)[:3, 2] @ (p - o2))
         return StereoPoint(p, float(np.linalg.norm(p1 - p2)), zl, zr)
 
+    def triangulate_many(
+        self,
+        uv_left: np.ndarray,
+        uv_right: np.ndarray,
+        T_root_left: np.ndarray,
+        T_root_right: np.ndarray,
+    ) -> np.ndarray:
+        """Closest-approach midpoints of many pixel pairs (vectorised :meth:`triangulate`).
+
+        Args:
+            uv_left: (n, 2) pixels in the left image [px].
+            uv_right: (n, 2) corresponding pixels in the right image [px].
+            T_root_left: (4, 4) left optical frame in root_link.
+            T_root_right: (4, 4) right optical frame in root_link.
+
+        Returns:
+            (n, 3) points in root_link [m]; NaN rows where the rays are parallel or meet
+            behind a camera.
+
+        Raises:
+            InvalidInput: malformed pixels or poses.
+        """
+        Tl, Tr = _pose(T_root_left, "T_root_left"), _pose(T_root_right, "T_root_right")
+        a = np.atleast_2d(np.asarray(uv_left, dtype=float))
+        b = np.atleast_2d(np.asarray(uv_right, dtype=float))
+        if a.shape != b.shape or a.ndim != 2 or a.shape[1] != 2:
+            raise InvalidInput(f"pixels: expected two (n, 2) arrays, got {a.shape} and {b.shape}")
+        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+            raise InvalidInput("pixels: non-finite pixel coordinates")
+
+        def rays(uv: np.ndarray, cam: CameraIntrinsics, T: np.ndarray) -> np.ndarray:
+            d = np.stack([(uv[:, 0] - cam.cx) / cam.fx, (uv[:, 1] - cam.cy) / cam.fy,
+                          np.ones(len(uv))], axis=1) @ T[:3, :3].T
+            return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+        d1, d2 = rays(a, self.left, Tl), rays(b, self.right, Tr)
+        o1, o2 = Tl[:3, 3], Tr[:3, 3]
+        w0 = o1 - o2
+        bb = np.einsum("ij,ij->i", d1, d2)
+        dd, e = d1 @ w0, d2 @ w0
+        den = 1.0 - bb * bb
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (bb * e - dd) / den
+            t = (e - bb * dd) / den
+        p = 0.5 * (o1 + s[:, None] * d1 + o2 + t[:, None] * d2)
+        p[(den < 1e-12) | ~(s > 0.0) | ~(t > 0.0)] = np.nan
+        return p
+
 
 def _pose(T: np.ndarray, name: str) -> np.ndarray:
     a = np.asarray(T, dtype=float)

@@ -1,0 +1,145 @@
+"""Benchmark of seeing and reaching (issue 23): the hand lands above the object the eyes found,
+judged against the object in the physics.
+
+    scripts/env.sh python bench/vision_reach.py --quick    # 5 trials
+    scripts/env.sh python bench/vision_reach.py            # 20 trials
+
+The running graph, as ``make demo`` starts it (private ROS domain; the simulator in lockstep
+with its cameras, the impedance controller in position mode, the PMP planner, the motion
+segmenter with its stereo target, the gaze controller). Each trial (random placements and
+motions, seed 23, not the tests' or the demo's): the head looks at the table where the
+cylinder will move and then tracks the stereo target; the cylinder is placed, moved at a
+constant speed (0.1-0.25 m/s, any direction on the table, 0.6-1.2 s) and stops; once the
+target is still, the right hand reaches the pre-grasp point 6 cm above the estimated top
+centre (``icub_pmp.demo.scenario.vision_reach``, the demo's phase 3), then goes back.
+
+Figures (one JSON line at the end):
+- ``target_err_mm_median`` / ``_p95``: every measured stereo estimate (/motion/target/estimate
+  with points > 0, moving and still) vs the cylinder's ground truth at the estimate's image
+  stamp (goal median <= 10);
+- ``arrival_err_mm_median``: the hand (forward kinematics of the simulator's joint states)
+  vs the point 6 cm above the cylinder's true top centre after the reach (goal <= 20);
+- ``success_rate``: trials the demo's judge passes (hand within 2 cm of that point, estimate
+  within 1 cm, the cylinder not pushed; goal >= 0.95);
+- ``detect_to_goal_ms_median``: simulated time from the first camera image after the motion
+  began to the first reach goal sent (the reach waits for the object to stop, so this includes
+  the motion itself); ``still_to_goal_ms_median``: from the end of the motion to that goal;
+- ``method``: ``geometric`` (rays from the kinematic camera poses); ``wall_s``, ``sim_s``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import numpy as np  # noqa: E402
+
+from icub_pmp.demo.scenario import DemoRunner, vision_reach  # noqa: E402
+from icub_pmp.graph import NodeGraph, reserve_domain_id, ros_environment  # noqa: E402
+from icub_pmp.ros.conversions import time_to_sec  # noqa: E402
+from icub_pmp.ros.probe import RosProbe  # noqa: E402
+
+GRAPH = ["sim_bridge", "impedance_controller", "pmp_planner", "motion_segmenter",
+         "gaze_controller"]
+PARAMS = {
+    "sim_bridge": {"mode": "lockstep", "use_sim_time": False},
+    "impedance_controller": {"lockstep": True, "use_sim_time": True, "mode": "position"},
+    "pmp_planner": {"use_sim_time": True},
+    "motion_segmenter": {"use_sim_time": True},
+    "gaze_controller": {"use_sim_time": True},
+}
+HOME = np.array([-0.22, 0.25, 0.12])
+
+
+def trials(n: int, seed: int = 23) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """(start, velocity, duration) of ``n`` motions on the table, starting and ending in the
+    region in front of the robot that both eyes see when looking at it."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        start = np.array([rng.uniform(-0.44, -0.32), rng.uniform(-0.16, 0.12), -0.03])
+        ang = rng.uniform(0.0, 2.0 * math.pi)
+        speed, dur = rng.uniform(0.1, 0.25), rng.uniform(0.6, 1.2)
+        vel = speed * np.array([math.cos(ang), math.sin(ang), 0.0])
+        end = start + vel * dur
+        if -0.46 <= end[0] <= -0.30 and -0.18 <= end[1] <= 0.14:
+            out.append((start, vel, dur))
+    return out
+
+
+def run(n: int) -> dict:
+    """Run ``n`` trials in a fresh graph; returns the figures."""
+    errs, arrivals, ok, d2g, s2g = [], [], [], [], []
+    wall0 = time.monotonic()
+    with reserve_domain_id() as domain:
+        env = ros_environment(domain)
+        with NodeGraph(GRAPH, PARAMS, env=env) as graph:
+            probe = RosProbe(domain, "bench_vision_reach")
+            try:
+                runner = DemoRunner(probe)
+                runner.wait_ready(services=("/pmp/reach", "/sim/set_object_pose",
+                                             "/gaze/look_at"))
+                runner.set_object("box", np.array([-0.52, -0.40, -0.05]))
+                sim0 = runner.sim_time()
+                for k, (start, vel, dur) in enumerate(trials(n)):
+                    runner.pmp_reach("home", {"right": HOME}, use_torso=True, tau=1.0,
+                                     judge_physics=False)
+                    r = vision_reach(runner, start, vel, dur, name=f"trial{k}")
+                    for m in list(runner.estimates):
+                        t = time_to_sec(m.header.stamp)
+                        if m.points > 0 and t >= r.sim_start:
+                            p = np.array([m.position.x, m.position.y, m.position.z])
+                            errs.append(np.linalg.norm(
+                                p - runner.object_position_at("cylinder", t)))
+                    ok.append(bool(r.success))
+                    if "arrival_vs_object_m" in r.extra:
+                        arrivals.append(r.extra["arrival_vs_object_m"])
+                    if "goal_sent_s" in r.extra:
+                        first_image = math.ceil(r.sim_start * 30.0 - 1e-6) / 30.0
+                        d2g.append(r.sim_start + r.extra["goal_sent_s"] - first_image)
+                        s2g.append(r.extra["goal_sent_s"] - dur)
+                    print(f"trial {k}: {'ok' if r.success else 'FAILED'} {r.message} "
+                          f"{ {a: round(b, 4) for a, b in r.extra.items()} }", flush=True)
+                sim_s = runner.sim_time() - sim0
+            except Exception:
+                print(graph.outputs()[-4000:], file=sys.stderr)
+                raise
+            finally:
+                probe.close()
+
+    def pct(a: list[float], q: float) -> float:
+        return float(np.percentile(a, q) * 1000) if len(a) else math.nan
+
+    return {
+        "bench": "vision_reach", "method": "geometric", "trials": n,
+        "target_err_mm_median": pct(errs, 50), "target_err_mm_p95": pct(errs, 95),
+        "target_estimates": len(errs),
+        "arrival_err_mm_median": pct(arrivals, 50),
+        "success_rate": float(np.mean(ok)) if ok else 0.0,
+        "detect_to_goal_ms_median": pct(d2g, 50), "still_to_goal_ms_median": pct(s2g, 50),
+        "sim_s": round(sim_s, 2), "wall_s": round(time.monotonic() - wall0, 1),
+        "load": round(os.getloadavg()[0], 2),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="5 trials instead of 20")
+    ap.add_argument("--trials", type=int, default=None)
+    args = ap.parse_args(argv)
+    n = args.trials or (5 if args.quick else 20)
+    print(json.dumps(run(n)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

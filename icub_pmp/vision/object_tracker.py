@@ -1,0 +1,213 @@
+"""ObjectTracker: follow one object in root_link from its stereo measurements.
+
+A constant-velocity Kalman filter (Bar-Shalom, Li, Kirubarajan, "Estimation with Applications
+to Tracking and Navigation", 2001, sect. 6.3.2: the discrete white-noise acceleration model,
+acceleration sigma ``position_noise``) on the object's centre. Every estimate is about the time
+of the images it was measured in (``stamp``), and a constant-velocity model follows a moving
+object without the lag of an exponential smoother.
+
+The motion segmenter sees an object only while it moves; the node then measures it in its own
+image region (still measurements, ``moving=False``), which here also sets its velocity to zero.
+Without any measurement the target is held where it was last measured (an object that nobody
+sees moving stays where it is) for ``hold_time``. A measurement farther than ``track_gate``
+from the target is another object: it takes over only after ``switch_frames`` measurements in a
+row near each other.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from icub_pmp.errors import InvalidInput
+from icub_pmp.vision.object_locator import ObjectEstimate
+from icub_pmp.vision.stereo_target_config import StereoTargetConfig
+
+__all__ = ["ObjectTracker", "TrackedObject", "TRACK_STATES"]
+
+#: ``moving`` (measured, seen moving), ``still`` (measured, not moving), ``held`` (not measured
+#: this frame), ``none`` (no target).
+TRACK_STATES = ("moving", "still", "held", "none")
+
+
+@dataclasses.dataclass(frozen=True)
+class TrackedObject:
+    """The tracked object at one image stamp.
+
+    Attributes:
+        valid: a target exists.
+        state: one of :data:`TRACK_STATES`.
+        stamp: time of the images this is about [s].
+        position: (3,) object centre in root_link [m] (NaN when not valid).
+        velocity: (3,) [m/s].
+        covariance: (3, 3) of the position [m^2].
+        top: (3,) centre of the top face [m] (the last measurement's, moved with the centre).
+        radius: horizontal extent about the axis [m] (last measurement).
+        height: top face above the support [m] (last measurement).
+        last_measured: stamp of the last measurement [s].
+        measurements: number of measurements since the target was acquired.
+    """
+
+    valid: bool
+    state: str
+    stamp: float
+    position: np.ndarray
+    velocity: np.ndarray
+    covariance: np.ndarray
+    top: np.ndarray
+    radius: float
+    height: float
+    last_measured: float
+    measurements: int
+
+    def __post_init__(self) -> None:
+        for name in ("position", "velocity", "covariance", "top"):
+            a = np.array(getattr(self, name), dtype=float, copy=True)
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+
+    @property
+    def speed(self) -> float:
+        """Norm of the velocity [m/s]."""
+        return float(np.linalg.norm(self.velocity))
+
+
+def _none(stamp: float) -> TrackedObject:
+    nan3 = np.full(3, np.nan)
+    return TrackedObject(False, "none", stamp, nan3, np.zeros(3), np.full((3, 3), np.nan), nan3,
+                         math.nan, math.nan, math.nan, 0)
+
+
+class ObjectTracker:
+    """Constant-velocity tracking of one object (module doc)."""
+
+    def __init__(self, config: StereoTargetConfig | None = None):
+        self.config = config or StereoTargetConfig()
+        self.reset()
+
+    def reset(self) -> None:
+        """Drop the target."""
+        self._x = np.zeros(6)
+        self._P = np.eye(6)
+        self._t = -math.inf
+        self._target = _none(math.nan)
+        self._shape: ObjectEstimate | None = None
+        self._candidate: np.ndarray | None = None
+        self._candidate_frames = 0
+        self._misses = 0
+        self._count = 0
+        self._last = math.nan
+
+    @property
+    def target(self) -> TrackedObject:
+        """The current target."""
+        return self._target
+
+    def update(self, stamp: float, measurement: ObjectEstimate | None,
+               moving: bool = True) -> TrackedObject:
+        """Advance to ``stamp`` [s] with this frame's measurement (None: not measured).
+
+        Args:
+            stamp: time of the images [s]; older than the last update by more than 0.5 s
+                resets the tracker (simulation reset, bag loop), otherwise older ones are
+                ignored.
+            measurement: the object measured in this frame's images.
+            moving: the measurement comes from motion blobs (False: the object was measured in
+                its own region without motion, so it is still).
+
+        Raises:
+            InvalidInput: ``stamp`` is not finite.
+        """
+        if not math.isfinite(stamp):
+            raise InvalidInput(f"stamp: expected a finite time [s], got {stamp}")
+        c = self.config
+        if self._target.valid and stamp < self._t - 0.5:
+            self.reset()
+        if self._target.valid and stamp < self._t:
+            return self._target
+        if not self._target.valid:
+            if measurement is None:
+                self._target = _none(stamp)
+                return self._target
+            self._start(stamp, measurement, moving)
+            return self._target
+        self._predict(stamp)
+        if measurement is None:
+            self._misses += 1
+            if stamp - self._target.last_measured > c.hold_time:
+                self.reset()
+                self._target = _none(stamp)
+                return self._target
+            if self._misses >= c.still_frames:
+                self._x[3:] = 0.0  # nobody sees it move: it stays where it is
+            self._publish(stamp, "held")
+            return self._target
+        z = np.asarray(measurement.position, float)
+        if np.linalg.norm(z - self._x[:3]) > c.track_gate:
+            # another object (or a jump): take over only if it persists
+            if self._candidate is not None and np.linalg.norm(z - self._candidate) <= c.track_gate:
+                self._candidate_frames += 1
+            else:
+                self._candidate_frames = 1
+            self._candidate = z
+            if self._candidate_frames >= c.switch_frames:
+                self._start(stamp, measurement, moving)
+            else:
+                self._misses += 1
+                self._publish(stamp, "held")
+            return self._target
+        self._candidate, self._candidate_frames, self._misses = None, 0, 0
+        if not moving:
+            self._x[3:] = 0.0
+            self._P[3:, 3:] = np.eye(3) * 1e-6
+            self._P[:3, 3:] = self._P[3:, :3] = 0.0
+        H = np.hstack([np.eye(3), np.zeros((3, 3))])
+        S = H @ self._P @ H.T + measurement.covariance
+        K = self._P @ H.T @ np.linalg.inv(S)
+        self._x = self._x + K @ (z - self._x[:3])
+        self._P = (np.eye(6) - K @ H) @ self._P
+        self._shape = measurement
+        self._count += 1
+        self._last = stamp
+        speed = float(np.linalg.norm(self._x[3:]))
+        self._publish(stamp, "moving" if moving and speed > c.still_speed else "still")
+        return self._target
+
+    # ------------------------------------------------------------------ filter
+    def _start(self, stamp: float, m: ObjectEstimate, moving: bool) -> None:
+        self._x = np.concatenate([np.asarray(m.position, float), np.zeros(3)])
+        self._P = np.zeros((6, 6))
+        self._P[:3, :3] = m.covariance
+        self._P[3:, 3:] = np.eye(3) * (0.5**2 if moving else 1e-6)
+        self._shape = m
+        self._count = 1
+        self._last = stamp
+        self._t = stamp
+        self._candidate, self._candidate_frames, self._misses = None, 0, 0
+        self._publish(stamp, "moving" if moving else "still")
+
+    def _predict(self, stamp: float) -> None:
+        dt = stamp - self._t
+        self._t = stamp
+        if dt <= 0.0:
+            return
+        F = np.eye(6)
+        F[:3, 3:] = np.eye(3) * dt
+        q = self.config.position_noise**2
+        G = np.array([[dt**4 / 4, dt**3 / 2], [dt**3 / 2, dt**2]]) * q
+        Q = np.kron(G, np.eye(3))
+        self._x = F @ self._x
+        self._P = F @ self._P @ F.T + Q
+
+    def _publish(self, stamp: float, state: str) -> None:
+        s = self._shape
+        assert s is not None  # noqa: S101 - a target always has its first measurement
+        offset = self._x[:3] - s.position
+        self._target = TrackedObject(
+            valid=True, state=state, stamp=stamp, position=self._x[:3].copy(),
+            velocity=self._x[3:].copy(), covariance=0.5 * (self._P[:3, :3] + self._P[:3, :3].T),
+            top=s.top + offset, radius=s.radius, height=s.height, last_measured=self._last,
+            measurements=self._count,
+        )

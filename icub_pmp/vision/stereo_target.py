@@ -1,0 +1,153 @@
+"""StereoTarget: the 3-D target of the eyes, frame pair by frame pair (no ROS).
+
+Per stereo pair (both images of one stamp, the camera poses at that stamp, the two eyes'
+motion segmentation results):
+
+1. the blobs are paired across the eyes (:class:`~icub_pmp.vision.blob_pairing.BlobPairing`);
+2. each pair, largest first, seeds a stereo measurement of the object
+   (:class:`~icub_pmp.vision.object_locator.ObjectLocator`: its pixels' disparity, its support,
+   its top face), unless the object is the robot's own arm (within ``self_radius`` of the
+   forearm and hand segments given by the caller);
+3. a target already followed is measured in its own image region (its projected shape) when no
+   pair measures it: this keeps an object that stopped (the segmenter sees it only while it
+   moves) and checks that it is still there;
+4. the :class:`~icub_pmp.vision.object_tracker.ObjectTracker` fuses the measurement at the
+   images' stamp.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
+from icub_pmp.peripersonal.segment_distance import segment_distance
+from icub_pmp.vision.blob_pairing import BlobPair, BlobPairing
+from icub_pmp.vision.exceptions import ObjectNotFound
+from icub_pmp.vision.head_cameras import CameraPoses
+from icub_pmp.vision.motion_blobs import MotionBlobs
+from icub_pmp.vision.object_locator import ObjectEstimate, ObjectGate, ObjectLocator, PointsFn
+from icub_pmp.vision.object_tracker import ObjectTracker, TrackedObject
+from icub_pmp.vision.stereo_rectification import StereoRectification
+from icub_pmp.vision.stereo_target_config import StereoTargetConfig
+
+__all__ = ["StereoTarget", "StereoTargetResult"]
+
+_MAX_PAIRS = 2  # pairs measured per frame (CPU bound)
+
+
+@dataclasses.dataclass(frozen=True)
+class StereoTargetResult:
+    """What one stereo pair gave.
+
+    Attributes:
+        target: the tracked object after this pair.
+        measurement: this pair's measurement of it, if any (None: not measured).
+        source: ``motion`` (measured from a blob pair), ``region`` (in the target's own
+            region), ``none``.
+        pairs: the consistent blob pairs of this frame.
+        note: why nothing was measured ('' otherwise).
+    """
+
+    target: TrackedObject
+    measurement: ObjectEstimate | None
+    source: str
+    pairs: tuple[BlobPair, ...]
+    note: str
+
+
+class StereoTarget:
+    """Pairing, locating and tracking (module doc)."""
+
+    def __init__(self, config: StereoTargetConfig | None = None,
+                 left: CameraIntrinsics | None = None, right: CameraIntrinsics | None = None):
+        self.config = config or StereoTargetConfig()
+        self.left = left or CameraIntrinsics()
+        self.right = right or self.left
+        self.pairing = BlobPairing(self.config)
+        self.locator = ObjectLocator(self.config)
+        self.tracker = ObjectTracker(self.config)
+
+    def reset(self) -> None:
+        """Drop the target."""
+        self.tracker.reset()
+
+    def process(self, stamp: float, left: np.ndarray, right: np.ndarray, blobs_left: MotionBlobs,
+                blobs_right: MotionBlobs, poses: CameraPoses,
+                self_segments: np.ndarray | None = None,
+                points_fn: PointsFn | None = None) -> StereoTargetResult:
+        """One stereo pair (module doc).
+
+        Args:
+            stamp: time of both images [s].
+            left, right: the images ((H, W) grey or (H, W, 3) RGB uint8).
+            blobs_left, blobs_right: the segmenter's results for these images.
+            poses: camera poses at ``stamp``.
+            self_segments: (k, 2, 3) segments [m] of the robot's arms in root_link (e.g.
+                elbow-wrist, wrist-hand); motion near them is the robot's own.
+            points_fn: pixel pairs -> root_link points (default: ray triangulation).
+        """
+        rect = StereoRectification(self.left, self.right, poses.T_root_left, poses.T_root_right)
+        pairs = self.pairing.pair(blobs_left, blobs_right, rect)
+        target = self.tracker.target
+        notes = []
+        meas: ObjectEstimate | None = None
+        source = "none"
+        for p in pairs[:_MAX_PAIRS]:
+            seed = _blob_seed(blobs_left, p.left)
+            try:
+                m = self.locator.locate(rect, left, right, seed, points_fn)
+            except ObjectNotFound as exc:
+                notes.append(f"pair {p.left}/{p.right}: {exc}")
+                continue
+            if self._is_self(m, self_segments):
+                notes.append(f"pair {p.left}/{p.right}: the robot's own arm")
+                continue
+            if target.valid and np.linalg.norm(m.position - target.position) \
+                    > self.config.track_gate:
+                notes.append(f"pair {p.left}/{p.right}: another object")
+                if meas is None:
+                    meas = m  # kept only if the target cannot be measured in its region
+                continue
+            meas, source = m, "motion"
+            break
+        moving = source == "motion"
+        if source != "motion" and target.valid:
+            seed = ObjectLocator.seed_from_object(target.top, target.radius, target.height,
+                                                  poses.T_root_left, self.left)
+            gate = ObjectGate(target.top, target.radius, max(0.015, 2.0 * self._sigma(target)))
+            try:
+                m = self.locator.locate(rect, left, right, seed, points_fn, gate)
+                meas, source = m, "region"
+                moving = bool(np.any(blobs_left.mask[seed] > 0)) and \
+                    float(np.mean(blobs_left.mask[seed] > 0)) > 0.1
+            except ObjectNotFound as exc:
+                notes.append(f"region: {exc}")
+        if meas is not None and source == "none":
+            source = "motion"  # another object, as a candidate for the tracker
+            moving = True
+        tracked = self.tracker.update(stamp, meas, moving)
+        return StereoTargetResult(tracked, meas if source != "none" else None, source, pairs,
+                                  "" if meas is not None else "; ".join(notes))
+
+    def _is_self(self, m: ObjectEstimate, segments: np.ndarray | None) -> bool:
+        if segments is None or len(segments) == 0:
+            return False
+        s = np.asarray(segments, float).reshape(-1, 2, 3)
+        pts = np.stack([m.top, m.position])
+        d = segment_distance(pts[:, None, :], pts[:, None, :], s[None, :, 0], s[None, :, 1])
+        return bool(d.min() < self.config.self_radius)
+
+    @staticmethod
+    def _sigma(t: TrackedObject) -> float:
+        return float(np.sqrt(max(np.linalg.eigvalsh(t.covariance)[-1], 0.0)))
+
+
+def _blob_seed(blobs: MotionBlobs, index: int) -> np.ndarray:
+    """The motion mask of one blob: the frame's mask inside the blob's bounding box."""
+    h, w = blobs.mask.shape
+    u0, v0, u1, v1 = blobs.blobs[index].bbox
+    seed = np.zeros((h, w), bool)
+    seed[max(v0, 0):min(v1 + 1, h), max(u0, 0):min(u1 + 1, w)] = True
+    return seed & (blobs.mask > 0)

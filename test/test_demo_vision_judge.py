@@ -1,0 +1,44 @@
+"""The demo's vision reach is judged against the object's ground truth, not the estimate."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from icub_pmp.demo.scenario import VISION_ARRIVAL_TOLERANCE, cylinder_height, judge_vision_reach
+from icub_pmp.pmp.pre_grasp import PreGrasp
+
+CYL = np.array([-0.38, 0.05, -0.03])
+
+
+def _goal(clearance: float = 0.06) -> np.ndarray:
+    return CYL + [0.0, 0.0, 0.5 * cylinder_height() + clearance]
+
+
+def test_judge_fails_when_the_hand_ends_5cm_from_the_object():
+    """A hand 5 cm from the point above the cylinder's true top fails the phase (as a stereo
+    estimate biased by 5 cm would make it end), however close the hand is to the estimate;
+    within 1.5 cm it passes; a 2 cm estimate error or a pushed object fail too."""
+    for bias in ([0.05, 0.0, 0.0], [0.0, 0.05, 0.0], [0.0, 0.0, 0.05]):
+        ok, msg, fig = judge_vision_reach(_goal() + bias, CYL, cylinder_height(), 0.06,
+                                          0.004, 0.0)
+        assert not ok and "5.0 cm from the point above" in msg
+        assert abs(fig["arrival_vs_object_m"] - 0.05) < 1e-9
+    ok, msg, _ = judge_vision_reach(_goal() + [0.0, 0.015, 0.0], CYL, cylinder_height(), 0.06,
+                                    0.004, 0.0)
+    assert ok and VISION_ARRIVAL_TOLERANCE == 0.02, msg
+    ok, msg, _ = judge_vision_reach(_goal(), CYL, cylinder_height(), 0.06, 0.02, 0.0)
+    assert not ok and "stereo estimate" in msg
+    ok, msg, _ = judge_vision_reach(_goal(), CYL, cylinder_height(), 0.06, 0.004, 0.03)
+    assert not ok and "pushed" in msg
+
+
+def test_pre_grasp_goes_over_the_object_not_through_it():
+    """From beside and below the top the hand goes through a via point above the goal; from
+    above the goal, far enough aside, it goes straight; the goal is 6 cm above the top."""
+    pre = PreGrasp()
+    top = CYL + [0.0, 0.0, 0.06]
+    low = pre.waypoints(CYL + [0.12, 0.0, 0.0], top, 0.03, 0.12)
+    assert len(low) == 2 and low[0][2] >= low[1][2] + 0.079
+    assert np.allclose(low[-1], top + [0.0, 0.0, 0.06])
+    high = pre.waypoints(top + [0.0, 0.2, 0.12], top, 0.03, 0.12)
+    assert len(high) == 1
