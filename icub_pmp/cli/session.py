@@ -13,7 +13,14 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "not_ready_reason"]
+__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "wait_for_service_type",
+           "wait_for_action_type", "offered_types", "type_mismatch", "not_ready_reason",
+           "DISCOVERY_TIMEOUT"]
+
+#: default wait [s] for a node, topic, service or action to be discovered and matched: DDS
+#: discovery took up to several seconds on a 2-core machine at load 6 (BENCHMARKS.md,
+#: cli_discovery); a short-lived CLI node starts from nothing every time
+DISCOVERY_TIMEOUT = 30.0
 
 
 @contextlib.contextmanager
@@ -73,3 +80,53 @@ def wait_for_topic_type(
 
     spin_until(executor, check, timeout)
     return found[0] if found else None
+
+
+def wait_for_service_type(
+    node: Node, executor: SingleThreadedExecutor, service: str, timeout: float
+) -> str | None:
+    """The type name ('pkg/srv/Type') of ``service`` once a server offers it, else None."""
+    found: list[str] = []
+
+    def check() -> bool:
+        for name, types in node.get_service_names_and_types():
+            if name == service and types:
+                found.append(types[0])
+                return True
+        return False
+
+    spin_until(executor, check, timeout)
+    return found[0] if found else None
+
+
+def offered_types(node: Node, name: str, kind: str) -> list[str]:
+    """The types under which the graph offers service or action ``name`` (actions as
+    'pkg/action/Type'); empty when nothing offers it yet."""
+    probe = f"{name}/_action/send_goal" if kind == "action" else name
+    for n, types in node.get_service_names_and_types():
+        if n == probe:
+            if kind == "action":
+                return [t[: -len("_SendGoal")] for t in types if t.endswith("_SendGoal")]
+            return list(types)
+    return []
+
+
+def type_mismatch(node: Node, name: str, kind: str, wanted: str) -> str | None:
+    """A one-line error when the graph offers ``name`` only under other types than
+    ``wanted`` ('pkg/srv/Type'), else None (not offered yet, or offered as ``wanted``)."""
+    types = offered_types(node, name, kind)
+    if not types or wanted in types:
+        return None
+    return f"{kind} {name} has type {', '.join(types)}, not {wanted}"
+
+
+def wait_for_action_type(
+    node: Node, executor: SingleThreadedExecutor, action: str, timeout: float
+) -> str | None:
+    """The type name ('pkg/action/Type') of ``action`` once a server offers it, else None
+    (from the type of its ``<action>/_action/send_goal`` service)."""
+    srv = wait_for_service_type(node, executor, f"{action}/_action/send_goal", timeout)
+    if srv is None or not srv.endswith("_SendGoal"):
+        return None
+    return srv[: -len("_SendGoal")]
+
