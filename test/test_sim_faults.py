@@ -22,12 +22,9 @@ from icub_interfaces.msg import SimStatus
 from icub_interfaces.srv import ApplyWrench, SetObjectPose
 from icub_pmp.config import config_dir
 from icub_pmp.kinematics import IcubModel
+from icub_pmp.ros.conversions import time_to_ns
 from icub_pmp.ros.qos import LATCHED_QOS
 from icub_pmp.testing import NodeProcess, ros_environment
-
-
-def _ns(stamp) -> int:
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 def _start(domain: int, **params) -> NodeProcess:
@@ -60,7 +57,7 @@ class _States:
 
     def _cb(self, m: JointState) -> None:
         with self.lock:
-            self.items.append((_ns(m.header.stamp), dict(zip(m.name, m.position))))
+            self.items.append((time_to_ns(m.header.stamp), dict(zip(m.name, m.position))))
 
     def since(self, k: int) -> list[tuple[int, dict[str, float]]]:
         with self.lock:
