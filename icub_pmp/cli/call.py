@@ -8,7 +8,8 @@
     icub call /impedance_controller/hold
 
 VALUES is the request in ros2cli's YAML syntax (fields not named keep their defaults); the
-type is read from the graph when it is not given. The response is printed as YAML. A bad
+type is read from the graph when it is not given. The response is printed as one YAML
+document (``response: {...}``). A bad
 field name or value exits with a one-line error naming the field, before anything is sent.
 """
 
@@ -20,13 +21,13 @@ import time
 
 import yaml
 
+from icub_pmp.cli.defaults import DISCOVERY_TIMEOUT
+
 __all__ = ["register", "run"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``call`` subcommand."""
-    from icub_pmp.cli.session import DISCOVERY_TIMEOUT
-
     p = sub.add_parser(
         "call", help="call a service (ros2 service call)",
         description=__doc__.split("\n\n", 1)[1],
@@ -44,13 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Validate the request, wait for the server, call once, print the response."""
-    from icub_pmp.cli.session import (
-        cli_node,
-        not_ready_reason,
-        spin_until,
-        type_mismatch,
-        wait_for_service_type,
-    )
+    from icub_pmp.cli.session import cli_node, discover, spin_until, spin_until_ready
     from icub_pmp.cli.yaml_values import (
         full_name,
         interface_name,
@@ -74,28 +69,23 @@ def run(args: argparse.Namespace) -> int:
     with cli_node("icub_call") as (node, executor):
         # the graph's type first: our own client would add its type to the graph
         deadline = time.monotonic() + args.timeout
-        found = wait_for_service_type(node, executor, service, args.timeout)
-        if found is None:
-            raise TimeoutError(not_ready_reason(node, service, "service", args.timeout,
-                                                "its server"))
+        found = discover(node, executor, service, "service",
+                         None if srv_type is None else type_name(srv_type), args.timeout,
+                         "its server")
         if srv_type is None:
             srv_type = get_interface(found)
             request = set_message_fields(srv_type.Request(), values)
-        else:
-            mismatch = type_mismatch(node, service, "service", type_name(srv_type))
-            if mismatch:
-                raise ValueError(mismatch)
         client = node.create_client(srv_type, service)
         remaining = max(1e-3, deadline - time.monotonic())
-        if not spin_until(executor, client.service_is_ready, remaining):
-            raise TimeoutError(not_ready_reason(node, service, "service", args.timeout,
-                                                "its server"))
+        spin_until_ready(node, executor, client.service_is_ready, remaining, service, "service",
+                         "its server", note_after=remaining)
         print(f"requester: making request: {request!r}", file=sys.stderr)
         future = client.call_async(request)
         if not spin_until(executor, future.done, args.response_timeout):
             raise TimeoutError(f"service {service} gave no answer within "
                                f"{args.response_timeout:g} s")
         response = future.result()
-    sys.stdout.write("response:\n")
-    sys.stdout.write(yaml.safe_dump(message_to_dict(response, None), sort_keys=False))
+    # one YAML document: {response: {...}}
+    sys.stdout.write(yaml.safe_dump({"response": message_to_dict(response, None)},
+                                    sort_keys=False))
     return 0

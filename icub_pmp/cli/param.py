@@ -20,13 +20,13 @@ from typing import Any
 
 import yaml
 
+from icub_pmp.cli.defaults import DISCOVERY_TIMEOUT
+
 __all__ = ["register", "run", "to_parameter_value", "parameter_value_text"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``param`` subcommand with ``list``, ``get``, ``set`` and ``dump``."""
-    from icub_pmp.cli.session import DISCOVERY_TIMEOUT
-
     p = sub.add_parser("param", help="list, get, set and dump node parameters (ros2 param)",
                        description=__doc__.split("\n\n", 1)[1],
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -141,11 +141,11 @@ def _node_name(name: str) -> str:
 
 def _call(node, executor, service: str, srv_type: Any, request: Any, timeout: float,
           server: str) -> Any:
-    from icub_pmp.cli.session import not_ready_reason, spin_until
+    from icub_pmp.cli.session import spin_until, spin_until_ready
 
     client = node.create_client(srv_type, service)
-    if not spin_until(executor, client.service_is_ready, timeout):
-        raise TimeoutError(not_ready_reason(node, service, "service", timeout, server))
+    spin_until_ready(node, executor, client.service_is_ready, timeout, service, "service",
+                     server)
     future = client.call_async(request)
     if not spin_until(executor, future.done, max(timeout, 10.0)):
         raise TimeoutError(f"service {service} gave no answer")

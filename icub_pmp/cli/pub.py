@@ -19,13 +19,13 @@ from __future__ import annotations
 import argparse
 import math
 
+from icub_pmp.cli.defaults import DISCOVERY_TIMEOUT
+
 __all__ = ["register", "run"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``pub`` subcommand."""
-    from icub_pmp.cli.session import DISCOVERY_TIMEOUT
-
     p = sub.add_parser(
         "pub", help="publish a message on a topic (ros2 topic pub)",
         description=__doc__.split("\n\n", 1)[1],

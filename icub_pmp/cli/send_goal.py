@@ -22,6 +22,8 @@ import time
 
 import yaml
 
+from icub_pmp.cli.defaults import DISCOVERY_TIMEOUT
+
 __all__ = ["register", "run", "STATUS_NAMES"]
 
 #: action_msgs/GoalStatus codes
@@ -31,8 +33,6 @@ STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``send-goal`` subcommand."""
-    from icub_pmp.cli.session import DISCOVERY_TIMEOUT
-
     p = sub.add_parser(
         "send-goal", help="send an action goal and wait for the result (ros2 action send_goal)",
         description=__doc__.split("\n\n", 1)[1],
@@ -60,13 +60,7 @@ def run(args: argparse.Namespace) -> int:
     """Validate the goal, wait for the server, send, print feedback and the result."""
     from rclpy.action import ActionClient
 
-    from icub_pmp.cli.session import (
-        cli_node,
-        not_ready_reason,
-        spin_until,
-        type_mismatch,
-        wait_for_action_type,
-    )
+    from icub_pmp.cli.session import cli_node, discover, spin_until, spin_until_ready
     from icub_pmp.cli.yaml_values import (
         full_name,
         interface_name,
@@ -86,22 +80,16 @@ def run(args: argparse.Namespace) -> int:
         print("Waiting for an action server to become available...", flush=True)
         # the graph's type first: our own client would add its type to the graph
         deadline = time.monotonic() + args.timeout
-        found = wait_for_action_type(node, executor, action, args.timeout)
-        if found is None:
-            raise TimeoutError(not_ready_reason(node, action, "action", args.timeout,
-                                                "its server"))
+        found = discover(node, executor, action, "action",
+                         None if action_type is None else type_name(action_type), args.timeout,
+                         "its server")
         if action_type is None:
             action_type = get_interface(found)
             goal = set_message_fields(action_type.Goal(), values)
-        else:
-            mismatch = type_mismatch(node, action, "action", type_name(action_type))
-            if mismatch:
-                raise ValueError(mismatch)
         client = ActionClient(node, action_type, action)
         remaining = max(1e-3, deadline - time.monotonic())
-        if not spin_until(executor, client.server_is_ready, remaining):
-            raise TimeoutError(not_ready_reason(node, action, "action", args.timeout,
-                                                "its server"))
+        spin_until_ready(node, executor, client.server_is_ready, remaining, action, "action",
+                         "its server", note_after=remaining)
         print(f"Sending goal:\n{_dump(goal)}", flush=True)
 
         def on_feedback(msg) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import sys
 import time
 import uuid
 from typing import Callable, Iterator
@@ -13,14 +14,8 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "wait_for_service_type",
-           "wait_for_action_type", "offered_types", "type_mismatch", "not_ready_reason",
-           "DISCOVERY_TIMEOUT"]
-
-#: default wait [s] for a node, topic, service or action to be discovered and matched: DDS
-#: discovery took up to several seconds on a 2-core machine at load 6 (BENCHMARKS.md,
-#: cli_discovery); a short-lived CLI node starts from nothing every time
-DISCOVERY_TIMEOUT = 30.0
+__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "offered_types", "type_mismatch",
+           "discover", "not_ready_reason", "spin_until_ready"]
 
 
 @contextlib.contextmanager
@@ -49,9 +44,20 @@ def spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool], timeo
 
 
 def not_ready_reason(node: Node, name: str, kind: str, timeout: float, server: str) -> str:
-    """Why a service or action ``name`` was not ready after ``timeout`` s: either nothing in
-    the graph offers it (with the hint ``server``: which node should), or it exists but this
-    client was not matched with it yet (discovery is slow on a loaded machine)."""
+    """Why a service, action or topic ``name`` was not ready after ``timeout`` s: either
+    nothing in the graph offers it (with the hint ``server``: which node should), or it
+    exists but this client was not matched with it yet (discovery is slow on a loaded
+    machine). ``kind``: 'service', 'action' or 'topic' (a topic is offered by a publisher)."""
+    domain = os.environ.get("ROS_DOMAIN_ID", "0")
+    if kind == "topic":
+        if node.count_publishers(name) > 0:
+            return (f"topic {name} has a publisher in the graph but no message arrived "
+                    f"after {timeout:g} s (not matched yet on a loaded machine, or nothing "
+                    "published: retry, or give a longer --timeout)")
+        subs = node.count_subscribers(name)
+        known = f" ({subs} subscriber(s) wait for it)" if subs else ""
+        return (f"topic {name} has no publisher after {timeout:g} s in ROS_DOMAIN_ID "
+                f"{domain}{known} (is {server} running?)")
     if kind == "action":
         probe = f"{name}/_action/send_goal"
     else:
@@ -60,9 +66,24 @@ def not_ready_reason(node: Node, name: str, kind: str, timeout: float, server: s
         return (f"{kind} {name} exists in the graph but was not matched after {timeout:g} s "
                 f"(DDS discovery is slow on a loaded machine: retry, or give a longer "
                 f"--timeout)")
-    domain = os.environ.get("ROS_DOMAIN_ID", "0")
     return (f"{kind} {name} not available after {timeout:g} s: no node offers it in "
             f"ROS_DOMAIN_ID {domain} (is {server} running?)")
+
+
+def spin_until_ready(node: Node, executor: SingleThreadedExecutor, ready: Callable[[], bool],
+                     timeout: float, name: str, kind: str, server: str,
+                     note_after: float = 3.0) -> None:
+    """Spin until ``ready()``; after ``note_after`` s say once on stderr what is awaited
+    (discovery can take seconds right after a node starts); after ``timeout`` s raise
+    TimeoutError with :func:`not_ready_reason`."""
+    if spin_until(executor, ready, min(note_after, timeout)):
+        return
+    if timeout > note_after:
+        print(f"icub: waiting for {kind} {name} (up to {timeout:g} s)...", file=sys.stderr,
+              flush=True)
+        if spin_until(executor, ready, timeout - note_after):
+            return
+    raise TimeoutError(not_ready_reason(node, name, kind, timeout, server))
 
 
 def wait_for_topic_type(
@@ -74,23 +95,6 @@ def wait_for_topic_type(
     def check() -> bool:
         for name, types in node.get_topic_names_and_types():
             if name == topic and types and node.count_publishers(topic) > 0:
-                found.append(types[0])
-                return True
-        return False
-
-    spin_until(executor, check, timeout)
-    return found[0] if found else None
-
-
-def wait_for_service_type(
-    node: Node, executor: SingleThreadedExecutor, service: str, timeout: float
-) -> str | None:
-    """The type name ('pkg/srv/Type') of ``service`` once a server offers it, else None."""
-    found: list[str] = []
-
-    def check() -> bool:
-        for name, types in node.get_service_names_and_types():
-            if name == service and types:
                 found.append(types[0])
                 return True
         return False
@@ -120,13 +124,18 @@ def type_mismatch(node: Node, name: str, kind: str, wanted: str) -> str | None:
     return f"{kind} {name} has type {', '.join(types)}, not {wanted}"
 
 
-def wait_for_action_type(
-    node: Node, executor: SingleThreadedExecutor, action: str, timeout: float
-) -> str | None:
-    """The type name ('pkg/action/Type') of ``action`` once a server offers it, else None
-    (from the type of its ``<action>/_action/send_goal`` service)."""
-    srv = wait_for_service_type(node, executor, f"{action}/_action/send_goal", timeout)
-    if srv is None or not srv.endswith("_SendGoal"):
-        return None
-    return srv[: -len("_SendGoal")]
-
+def discover(node: Node, executor: SingleThreadedExecutor, name: str, kind: str,
+             wanted: str | None, timeout: float, server: str) -> str:
+    """The type ('pkg/srv/Type', 'pkg/action/Type') under which the graph offers service or
+    action ``name``, once it does (TimeoutError with :func:`not_ready_reason` after
+    ``timeout`` s). With ``wanted`` given, ValueError when the graph offers it only under
+    other types. Call it before creating the client: a client adds its own type to the
+    graph."""
+    spin_until_ready(node, executor, lambda: bool(offered_types(node, name, kind)), timeout,
+                     name, kind, server)
+    if wanted is not None:
+        mismatch = type_mismatch(node, name, kind, wanted)
+        if mismatch:
+            raise ValueError(mismatch)
+        return wanted
+    return offered_types(node, name, kind)[0]
