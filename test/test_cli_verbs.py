@@ -75,6 +75,16 @@ def test_parameter_values_follow_the_declared_type():
     assert to_parameter_value("true").type == T.PARAMETER_BOOL  # guessed as ros2param does
 
 
+def test_values_may_follow_options(ros_domain_id, capsys):
+    """`icub send-goal ACTION -f VALUES` (values after an option, as ros2cli allows) is
+    parsed: the command goes on to discovery instead of 'unrecognized arguments'."""
+    from icub_pmp.cli.main import main
+
+    rc = main(["send-goal", "/no_such/action", "-f", "{a: 1}", "--timeout", "0.5"])
+    assert rc == 1
+    assert "action /no_such/action not available after 0.5 s" in capsys.readouterr().err
+
+
 # ---------------------------------------------------------------------- over DDS
 @pytest.fixture(scope="module")
 def graph(ros_domain_id):

@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"wait this long for the server [s] (default {DISCOVERY_TIMEOUT:g})")
     p.add_argument("--response-timeout", type=float, default=60.0,
                    help="wait this long for the answer once sent [s] (default 60)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, extra_positionals="args")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -53,7 +53,14 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``icub`` console script."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    # positionals after an option (`icub send-goal ACTION -f VALUES`): argparse stops its
+    # list at the option; verbs that allow it name the list in `extra_positionals`
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        dest = getattr(args, "extra_positionals", None)
+        if dest is None or any(e.startswith("-") and not _is_number(e) for e in extra):
+            parser.error(f"unrecognized arguments: {' '.join(extra)}")
+        setattr(args, dest, [*getattr(args, dest), *extra])
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
@@ -67,6 +74,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (IcubPmpError, TimeoutError, ValueError, OSError) as exc:
         print(f"icub: error: {exc}", file=sys.stderr)
         return 1
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 if __name__ == "__main__":  # pragma: no cover

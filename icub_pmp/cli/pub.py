@@ -32,7 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("topic", help="topic name, e.g. /effort_command")
     p.add_argument("type", help="message type, e.g. sensor_msgs/msg/JointState")
-    p.add_argument("values", nargs="?", default="{}", help="the message in YAML (default: {})")
+    p.add_argument("values", nargs="*", metavar="VALUES",
+                   help="the message in YAML (default: {})")
     p.add_argument("-r", "--rate", type=float, default=1.0,
                    help="publishing rate [Hz] (default 1)")
     p.add_argument("-1", "--once", action="store_true", help="publish one message and exit")
@@ -51,7 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--qos-depth", type=int, default=1)
     p.add_argument("-p", "--print", type=int, default=1, metavar="N", dest="print_every",
                    help="print every N-th published message (0: none)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, extra_positionals="values")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -77,7 +78,10 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--wait-matching-subscriptions must be >= 0, got {wait_n}")
     topic = full_name(args.topic)
     msg_type = get_interface(interface_name(args.type, "msg"))
-    msg = set_message_fields(msg_type(), parse_values(args.values))
+    if len(args.values) > 1:
+        raise ValueError(f"expected one VALUES argument, got {len(args.values)}: "
+                         f"{args.values} (quote the YAML)")
+    msg = set_message_fields(msg_type(), parse_values(args.values[0] if args.values else "{}"))
     qos = QoSProfile(
         depth=args.qos_depth,
         reliability=ReliabilityPolicy.RELIABLE if args.qos_reliability == "reliable"

@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"wait this long for the server [s] (default {DISCOVERY_TIMEOUT:g})")
     p.add_argument("--result-timeout", type=float, default=0.0,
                    help="give up waiting for the result after this long [s] (default: wait)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, extra_positionals="args")
 
 
 def _dump(msg: object) -> str:

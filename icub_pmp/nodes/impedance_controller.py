@@ -30,7 +30,11 @@ controller keeps running. Watchdogs: a 20 Hz timer on the node clock (simulated 
 wall time (the simulator is paused or gone: simulated time has stopped, so only wall time can
 tell); estimates older than ``estimate_timeout`` switch the torque loop off and none for
 ``estimate_lost_timeout`` latches a safe hold. Each is logged once and shown on the status
-topic. All :class:`ImpedanceControllerConfig` parameters can change at run time (validated).
+topic. A joint state older than the newest (a restarted simulator: simulated time went back,
+:class:`~icub_pmp.time_jump_detector.TimeJumpDetector`) ends the running goals, drops the old
+timeline's estimate and the lockstep estimate gate and holds the measured posture; it is said
+in the log. All :class:`ImpedanceControllerConfig` parameters can change at run time
+(validated).
 """
 
 from __future__ import annotations
