@@ -191,6 +191,36 @@ def test_lockstep_without_answers_holds_the_robot_not_its_last_torques(ros_domai
         assert proc.stop() == 0, proc.output()[-3000:]
 
 
+def test_free_run_without_commands_holds_the_robot(ros_domain_id, ros_probe):
+    """Free run: a 'controller' (the probe) drives l_elbow with +3 N m, then falls silent.
+    After command_timeout (0.3 s of wall time) the simulator holds every joint where it was
+    ('holding' on /sim/status, 'command_timeout' in the message); the elbow stays put while
+    simulated time runs on (with the torque kept it would run into its limit)."""
+    proc = _start(ros_domain_id, command_timeout=0.3)
+    status = _Status(ros_probe)
+    states = _States(ros_probe)
+    pub = ros_probe.node.create_publisher(JointState, "/effort_command",
+                                          qos_profile_sensor_data)
+    try:
+        assert ros_probe.wait_for(lambda: pub.get_subscription_count() > 0, 60.0), \
+            proc.output()[-3000:]
+        assert ros_probe.wait_for(lambda: status.last is not None, 30.0)
+        cmd = JointState(name=["l_elbow"], effort=[3.0])
+        assert ros_probe.wait_for(lambda: pub.publish(cmd) or status.last.command_wall_age
+                                  >= 0.0, 30.0)  # a command was accepted
+        assert status.last.status == "running"
+        assert ros_probe.wait_for(lambda: status.last.status == "holding", 30.0), \
+            proc.output()[-3000:]
+        assert "command_timeout" in status.last.message
+        k = len(states)
+        assert ros_probe.wait_for(lambda: len(states) > k + 300, 60.0)  # 0.3 s simulated
+        held = [q["l_elbow"] for _, q in states.since(k)]
+        assert max(held) - min(held) < 0.03, (min(held), max(held))
+    finally:
+        ros_probe.destroy(pub, status.sub, states.sub)
+        assert proc.stop() == 0, proc.output()[-3000:]
+
+
 def test_pause_is_reported_on_the_status(ros_domain_id, ros_probe):
     """/sim/set_paused shows on /sim/status ('paused', with the reason) and back."""
     from std_srvs.srv import SetBool
