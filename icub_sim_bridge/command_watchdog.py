@@ -56,6 +56,10 @@ class CommandWatchdog:
         """Lockstep: the state of ``sim_time`` [s] got no answer within ``timeout`` [s] of
         wall time. Returns the reason when this starts a hold (hold the robot and say so),
         None when already holding."""
+        if self.last_command is None:
+            return self._hold(f"no controller has answered yet: no /effort_command for the "
+                              f"state of t = {sim_time:.3f} s within {timeout:g} s "
+                              "(lockstep_timeout)")
         return self._hold(f"no /effort_command stamped t = {sim_time:.3f} s within "
                           f"{timeout:g} s (lockstep_timeout)")
 

@@ -10,10 +10,13 @@ def test_lockstep_missed_answer_holds_once_and_a_command_resumes(fake_clock):
     """The first missed answer starts a hold and says why; further misses do not repeat it;
     the next applied command ends the hold (once)."""
     w = CommandWatchdog(fake_clock)
+    assert "no controller has answered yet" in w.missed_answer(0.0, 0.5)
+    w.command()
+    assert w.resume()
     reason = w.missed_answer(12.345, 0.5)
     assert w.holding and reason == w.reason
-    assert "t = 12.345 s" in reason and "lockstep_timeout" in reason
-    assert w.missed_answer(12.346, 0.5) is None and w.holds == 1
+    assert "stamped t = 12.345 s within 0.5 s" in reason and "lockstep_timeout" in reason
+    assert w.missed_answer(12.346, 0.5) is None and w.holds == 2
     w.command()
     assert w.resume() and not w.holding and w.reason == ""
     assert not w.resume()
