@@ -186,10 +186,11 @@ def test_param_list_get_set(graph):
 def test_waits_say_whether_the_thing_exists_in_the_graph(graph):
     """A topic the controller subscribes to but nobody publishes: the error says it has no
     publisher and that a subscriber waits for it (not just 'not found')."""
+    # 10 s: long enough to discover the controller's subscription on a loaded machine
     out = run_icub("echo", "/impedance_controller/velocity_command", "--count", "1",
-                   "--timeout", "2")
+                   "--timeout", "10")
     _one_line_error(out, "topic /impedance_controller/velocity_command has no publisher "
-                         "after 2 s")
+                         "after 10 s")
     assert "subscriber(s) wait for it" in out.stderr
 
 
