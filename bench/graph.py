@@ -39,8 +39,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import numpy as np  # noqa: E402
 
 from icub_pmp.kinematics import IcubModel  # noqa: E402
-from icub_pmp.testing import NodeProcess, RosProbe, repo_root, reserve_domain_id  # noqa: E402
-from icub_pmp.testing.ros_domain import ros_environment  # noqa: E402
+from icub_pmp.testing import (  # noqa: E402
+    NodeProcess,
+    RosProbe,
+    repo_root,
+    reserve_domain_id,
+    ros_environment,
+)
 
 
 def _targets(model: IcubModel, n: int, seed: int) -> list[tuple[str, np.ndarray]]:

@@ -10,6 +10,9 @@ rendered sequences of the tests and benchmarks. The simulator uses the robot des
   objects, scripted wrenches
 - :class:`CameraRenderer`: the two eye cameras (offscreen, optionally on a worker thread)
 - :class:`SimConfig`: the parameters (``config/sim_bridge.yaml``)
+- :class:`~icub_sim_bridge.command_watchdog.CommandWatchdog`: hold the robot when the
+  controller stops answering; :class:`~icub_sim_bridge.lockstep_gate.LockstepGate`,
+  :class:`~icub_sim_bridge.step_pacer.StepPacer`: the node's stepping
 """
 
 from icub_sim_bridge.camera_renderer import CameraRenderer

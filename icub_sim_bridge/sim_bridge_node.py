@@ -16,13 +16,23 @@ publishes  /clock (every ``clock_decimation`` steps: 100 Hz of simulated time by
            other or the torso, root_link; an empty list when nothing touches)
 subscribes /effort_command (JointState name + effort [N m]; any subset of joints; rejected
            whole with a throttled warning on unknown names, NaN/inf, length mismatch)
+           /sim/status (icub_interfaces/SimStatus, reliable + transient local: running,
+           holding or paused and why, divergences; on change and every wall second)
 services   /sim/reset (ResetSim), /sim/set_object_pose (SetObjectPose), /sim/set_paused
-           (std_srvs/SetBool), /sim/apply_wrench (ApplyWrench)
+           (std_srvs/SetBool), /sim/apply_wrench (ApplyWrench: bounded force, torque and
+           duration; a request beyond the bounds is answered success=false with the reason)
 
 Modes (parameter ``mode``): ``free_run`` paced at ``real_time_factor`` (0 = as fast as
 possible) or ``lockstep``: after publishing the state stamped t, the next step waits (up to
-``lockstep_timeout`` s of wall time) for an /effort_command stamped exactly t; on timeout it
-steps with the last valid command and warns (throttled).
+``lockstep_timeout`` s of wall time) for an /effort_command stamped exactly t.
+
+Missing commands (:class:`~icub_sim_bridge.command_watchdog.CommandWatchdog`): when the
+lockstep answer does not come in time, or in free run no command came for
+``command_timeout`` of wall time, every joint goes on the simulator's hold at the posture it
+had (never the last torques: a dead controller is a safe hold); said once in the log and on
+/sim/status, and the next command hands the joints back (said too). Divergences of the
+physics (``Simulator`` doc) are recovered from in the simulator; each is logged and reported
+on /sim/status (``pause_on_divergence`` then pauses the simulation).
 
 Streams other than /clock and /joint_states (FT, IMU, ground truth, cameras) are only filled
 and published while they have subscribers (checked every 100 steps), as Gazebo's lazy
@@ -44,6 +54,7 @@ from __future__ import annotations
 import collections
 import math
 import threading
+import time
 from typing import Any, Callable, Mapping
 
 import numpy as np
@@ -55,7 +66,7 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 from std_srvs.srv import SetBool
 
 from icub_interfaces.msg import SelfContact as SelfContactMsg
-from icub_interfaces.msg import SelfContacts
+from icub_interfaces.msg import SelfContacts, SimStatus
 from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.ros.conversions import (
@@ -65,6 +76,7 @@ from icub_pmp.ros.conversions import (
 )
 from icub_pmp.ros.node_runner import spin_node
 from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.qos import LATCHED_QOS
 from icub_pmp.ros.raw_messages import (
     RawJointState,
     RawJointStateReader,
@@ -72,6 +84,7 @@ from icub_pmp.ros.raw_messages import (
     read_joint_state,
 )
 from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
+from icub_sim_bridge.command_watchdog import CommandWatchdog
 from icub_sim_bridge.lockstep_gate import LockstepGate
 from icub_sim_bridge.simulator import FT_SENSORS
 from icub_sim_bridge.step_pacer import StepPacer
@@ -80,7 +93,8 @@ __all__ = ["SimBridge", "main"]
 
 #: parameters that may change while running (the others shape the model: restart)
 _RUNTIME_PARAMS = {"mode", "real_time_factor", "lockstep_timeout", "clock_decimation",
-                   "imu_decimation", "ground_truth_decimation", "start_paused"}
+                   "imu_decimation", "ground_truth_decimation", "start_paused",
+                   "command_timeout", "pause_on_divergence"}
 _CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
@@ -175,6 +189,13 @@ class SimBridge(Node):
         self._active_cache: dict[int, bool] = {}
         self.rejected = 0
         self.paused = self.config.start_paused
+        self.watchdog = CommandWatchdog()
+        self._divergences_seen = 0
+        self._pause_reason = "start_paused" if self.paused else ""
+        self.pub_status = self.create_publisher(SimStatus, "/sim/status", LATCHED_QOS)
+        self._status_msg = SimStatus()
+        self._status_sent: tuple | None = None
+        self._status_wall = 0.0
         # read from its bytes (raw_messages): the 1 kHz input of the lockstep loop
         self._effort_reader = RawJointStateReader()
         self._effort_names: list[str] | None = None  # names of the last valid command
@@ -198,7 +219,15 @@ class SimBridge(Node):
     def _on_config_change(self, old: SimConfig, new: SimConfig, changed: frozenset[str]
                           ) -> None:
         if "start_paused" in changed:
-            self.paused = new.start_paused
+            self._set_paused(new.start_paused, "start_paused parameter")
+
+    def _set_paused(self, paused: bool, why: str) -> None:
+        if paused != self.paused:
+            self.get_logger().info(f"{'paused' if paused else 'running'} at t = "
+                                   f"{self.sim.time:.3f} s ({why})")
+        self.paused = paused
+        self._pause_reason = why if paused else ""
+        self.watchdog.restart()
 
     # ------------------------------------------------------------------ cameras
     def _setup_cameras(self) -> None:
@@ -266,6 +295,7 @@ class SimBridge(Node):
             return
         with self._cmd_lock:
             self._pending.append(_Command(stamp_ns, idx, tau))
+        self.watchdog.command()
         self.lockstep.answer(stamp_ns)
 
     def _apply_pending(self) -> None:
@@ -276,6 +306,23 @@ class SimBridge(Node):
             self._pending.clear()
         for c in cmds:
             self.sim.command_indices(c.idx, c.tau)
+        if self.watchdog.resume():
+            self.get_logger().info(f"/effort_command is back at t = {self.sim.time:.3f} s: "
+                                   "the commanded torques drive the joints again")
+            self._publish_status(force=True)
+
+    def _hold(self, reason: str | None) -> None:
+        """Put every joint on the simulator's hold (a missing command, ``reason`` from the
+        watchdog; None: already holding)."""
+        if reason is None:
+            return
+        with self._cmd_lock:
+            self._pending.clear()  # late answers to earlier states are not applied
+        self.sim.hold()
+        self.get_logger().warning(f"{reason}: every joint on the simulator's hold at its "
+                                  "current posture (not the last torques) until commands "
+                                  "come back")
+        self._publish_status(force=True)
 
     # ------------------------------------------------------------------ services
     def _run_in_loop(self, fn: Callable[[], Any], timeout: float = 10.0) -> tuple[bool, str]:
@@ -324,7 +371,8 @@ class SimBridge(Node):
 
     def _srv_set_paused(self, req: SetBool.Request, resp: SetBool.Response) -> SetBool.Response:
         def do() -> str:
-            self.paused = bool(req.data)
+            self._set_paused(bool(req.data), "/sim/set_paused")
+            self._publish_status(force=True)
             return f"{'paused' if self.paused else 'running'} at t = {self.sim.time:.3f} s"
 
         resp.success, resp.message = self._run_in_loop(do)
@@ -421,10 +469,57 @@ class SimBridge(Node):
         m.contacts = contacts
         self.pub_self.publish(m)
 
+    # ------------------------------------------------------------------ status
+    def _check_divergence(self) -> None:
+        """Say so once per divergence the simulator recovered from (and pause if asked)."""
+        d = self.sim.last_divergence
+        if d is None or d.count == self._divergences_seen:
+            return
+        new = d.count - self._divergences_seen
+        self._divergences_seen = d.count
+        with self._cmd_lock:
+            self._pending.clear()
+        more = f" ({new} since the last report)" if new > 1 else ""
+        self.get_logger().error(
+            f"the physics diverged at t = {d.time:.3f} s{more}: {d.reason}; restored the "
+            f"state of t = {d.restored_time:.3f} s at rest, scripted wrenches cleared, every "
+            "joint on the simulator's hold until commanded again (simulated time goes on)",
+            throttle_duration_sec=1.0)
+        if self.config.pause_on_divergence:
+            self._set_paused(True, f"pause_on_divergence after the divergence at t = "
+                                   f"{d.time:.3f} s")
+        self._publish_status(force=True)
+
+    def _publish_status(self, force: bool = False) -> None:
+        """/sim/status when something changed, and every second of wall time."""
+        w = self.watchdog
+        status = "paused" if self.paused else "holding" if w.holding else "running"
+        message = self._pause_reason if self.paused else w.reason
+        key = (status, message, self.config.mode, self.sim.divergences)
+        now = time.monotonic()
+        if not force and key == self._status_sent and now - self._status_wall < 1.0:
+            return
+        self._status_sent, self._status_wall = key, now
+        m = self._status_msg
+        _set_stamp(m.header.stamp, int(round(self.sim.time * 1e9)))
+        m.status, m.message, m.mode = status, message, self.config.mode
+        m.command_wall_age = w.command_age()
+        m.steps = self.sim.steps
+        m.lockstep_timeouts = self.lockstep.timeouts
+        m.rejected_commands = self.rejected
+        d = self.sim.last_divergence
+        m.divergences = self.sim.divergences
+        m.last_divergence_time = -1.0 if d is None else d.time
+        m.last_divergence = "" if d is None else (
+            f"{d.reason}: restored the state of t = {d.restored_time:.3f} s at rest, "
+            "scripted wrenches cleared")
+        self.pub_status.publish(m)
+
     # ------------------------------------------------------------------ the loop
     def run(self, should_stop: Callable[[], bool]) -> None:
         """Step, publish, pace / lockstep until ``should_stop()`` (the physics thread)."""
         self._publish_state()
+        self._publish_status(force=True)
         while not should_stop():
             if self._requests:
                 self._drain_requests()
@@ -432,20 +527,26 @@ class SimBridge(Node):
                 self._wake.wait(0.05)
                 self._wake.clear()
                 self.pacer.restart(self.sim.time)
+                self.watchdog.restart()
+                self._publish_status()
                 continue
             cfg = self.config
             if cfg.mode == "lockstep":
                 if not self.lockstep.wait(cfg.lockstep_timeout):
-                    self.get_logger().warning(
-                        f"lockstep: no /effort_command stamped t = {self.sim.time:.3f} s within "
-                        f"{cfg.lockstep_timeout} s ({self.lockstep.timeouts} timeouts so far); "
-                        "stepping with the last command", throttle_duration_sec=2.0)
                     if should_stop():
                         break
+                    self._hold(self.watchdog.missed_answer(self.sim.time,
+                                                           cfg.lockstep_timeout))
                 self.pacer.restart(self.sim.time)
+            else:
+                self._hold(self.watchdog.check(cfg.command_timeout))
             self._apply_pending()
             self.sim.step()
+            if self.sim.divergences != self._divergences_seen:
+                self._check_divergence()
             self._publish_state()
+            if self.sim.steps % 100 == 0:
+                self._publish_status()
             if cfg.mode == "free_run":
                 wait = self.pacer.wait_time(self.sim.time, cfg.real_time_factor)
                 if wait > 0:

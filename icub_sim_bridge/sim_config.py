@@ -7,6 +7,7 @@ Field names equal the ``sim_bridge`` ROS parameter names. Positions are in ``roo
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from icub_pmp.config import ConfigBase
 from icub_pmp.errors import ConfigError
@@ -60,6 +61,14 @@ class SimConfig(ConfigBase):
     cylinder_height: float = 0.12  # [m]
     cylinder_mass: float = 0.1  # [kg]
     object_friction: float = 1.0  # sliding friction of hands, objects and table
+    # --- safety: bounds on scripted requests, divergence guard, missing commands ------------
+    max_wrench_force: float = 100.0  # [N] largest |force| of a scripted wrench
+    max_wrench_torque: float = 10.0  # [N m] largest |torque| of a scripted wrench
+    max_wrench_duration: float = 60.0  # [s] longest scripted wrench (simulated time)
+    object_workspace_radius: float = 1.5  # [m] objects go within it, above the floor
+    divergence_speed: float = 1000.0  # [rad/s, m/s] a dof this fast: the simulation diverged
+    pause_on_divergence: bool = False  # after recovering from a divergence, pause (node)
+    command_timeout: float = 0.5  # [s] wall time without /effort_command in free_run: hold
 
     def validate(self) -> None:
         """Range checks (raise :class:`ConfigError` naming the field)."""
@@ -70,6 +79,11 @@ class SimConfig(ConfigBase):
         if self.real_time_factor < 0.0:
             raise ConfigError(f"SimConfig.real_time_factor: expected >= 0, got "
                               f"{self.real_time_factor}")
+        for name in ("max_wrench_force", "max_wrench_torque", "max_wrench_duration",
+                     "object_workspace_radius", "divergence_speed", "command_timeout"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0.0):
+                raise ConfigError(f"SimConfig.{name}: expected a finite value > 0, got {v}")
         if self.lockstep_timeout <= 0.0:
             raise ConfigError(f"SimConfig.lockstep_timeout: expected > 0 s, got "
                               f"{self.lockstep_timeout}")

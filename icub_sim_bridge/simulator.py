@@ -33,7 +33,24 @@ step, torque applied during it):
 
 Scene: :meth:`object_pose`, :meth:`set_object_pose` (``box``, ``cylinder``),
 :meth:`apply_wrench` (a scripted external wrench on a body or at a frame for a duration).
+Both refuse what is not physically meaningful (``SimConfig``): a force above
+``max_wrench_force``, a torque above ``max_wrench_torque``, a duration above
+``max_wrench_duration``, an object farther than ``object_workspace_radius`` from root_link or
+below the floor.
 Cameras: :class:`icub_sim_bridge.camera_renderer.CameraRenderer` renders a snapshot.
+
+Divergence guard: MuJoCo's own reaction to an unstable step (NaN, inf or a huge value in the
+accelerations) is to reset the whole state to the model's zero posture *and rewind time to 0*
+("auto-reset"); here that is disabled. Instead, after every step a dof faster than
+``divergence_speed`` (NaN included) counts as a divergence, and :meth:`step` recovers from it
+at once: the last good state (kept every 0.1 s of simulated time: finite, joints within their
+limits) is restored at rest, every scripted wrench is cleared, every joint goes on hold at the
+restored posture (as after :meth:`reset`) and time goes on from where it was: simulated time
+never goes back. :attr:`last_divergence` and :attr:`divergences` tell what happened.
+
+Missing commands: :meth:`hold` puts every joint on hold at its current posture (what the
+simulator does when the controller stops answering); the next command hands the joints it
+names back to the commanded torque.
 """
 
 from __future__ import annotations
@@ -51,7 +68,7 @@ from icub_sim_bridge.model_builder import OBJECT_NAMES, BuiltModel, ModelBuilder
 from icub_sim_bridge.sim_config import SimConfig
 
 __all__ = ["Simulator", "JointState", "Wrench", "Pose", "ImuReading", "SelfContact",
-           "FT_SENSORS", "FT_SIGN_CONVENTION", "SELF_CONTACT_KINDS"]
+           "Divergence", "FT_SENSORS", "FT_SIGN_CONVENTION", "SELF_CONTACT_KINDS"]
 
 FT_SENSORS = ("l_arm_ft", "r_arm_ft", "l_leg_ft", "r_leg_ft")
 FT_SIGN_CONVENTION = "child_to_parent"
@@ -62,6 +79,10 @@ _TENDON_JOINTS = ("eyes_version", "eyes_vergence")
 #: hold gains per N m of torque limit: kp = 5 * tau_max [N m/rad], kd = 0.2 * tau_max [N m s/rad]
 _HOLD_KP_PER_NM = 5.0
 _HOLD_KD_PER_NM = 0.2
+#: the last good state is kept every this many steps (0.1 s at 1 ms)
+_SNAPSHOT_EVERY = 100
+#: a kept state has every joint within its limits plus this [rad] (limits are soft in MuJoCo)
+_SNAPSHOT_LIMIT_MARGIN = 0.1
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -119,6 +140,15 @@ class SelfContact(NamedTuple):
     depth: float
 
 
+class Divergence(NamedTuple):
+    """A divergence of the physics and the recovery from it (module doc)."""
+
+    time: float  # simulated time when it was detected [s]
+    reason: str  # what was seen, e.g. "speed 2.1e+04 of dof 'r_elbow' > 1000"
+    restored_time: float  # simulated time at which the restored state had been kept [s]
+    count: int  # divergences so far (this one included)
+
+
 @dataclasses.dataclass
 class _AppliedWrench:
     body: int
@@ -137,6 +167,8 @@ class Simulator:
         self.spec = spec or RobotSpec.load()
         self.built = built or ModelBuilder(self.config, self.spec).build()
         m = self.model = self.built.model
+        # no auto-reset: MuJoCo would rewind time to 0 and put the robot at the zero posture
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
         self.data = mujoco.MjData(m)
         self.joint_names: tuple[str, ...] = tuple(self.spec.actuated_joints)
         self.n = len(self.joint_names)
@@ -215,6 +247,15 @@ class Simulator:
         self._grav_dof = np.zeros(0, dtype=int)
         self._grav_kp = np.zeros(0)
         self.steps = 0
+        # divergence guard (module doc)
+        self._vmax = float(self.config.divergence_speed)
+        self._vmax2 = self._vmax ** 2
+        self._good_qpos = self.data.qpos.copy()
+        self._good_time = 0.0
+        self.divergences = 0
+        self.last_divergence: Divergence | None = None
+        floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+        self.floor_height = float(m.geom_pos[floor][2]) if floor >= 0 else -np.inf
         self.reset(self.config.initial_posture)
 
     # ------------------------------------------------------------------ names
@@ -254,6 +295,7 @@ class Simulator:
         self._commanded = np.zeros(self.n, dtype=bool)
         self._set_held()
         self._applied.clear()
+        self._keep_good_state()
 
     def _posture_dict(self, q: dict[str, float]) -> dict[str, float]:
         for n, v in q.items():
@@ -324,6 +366,24 @@ class Simulator:
             self._set_held()
         return self._tau_cmd.copy()
 
+    def hold(self) -> None:
+        """Put every joint on the simulator's hold (module doc of the hold: joint PD plus
+        gravity compensation) at its current posture; joints already held keep their target.
+        The next command hands the joints it names back to the commanded torque."""
+        newly = self._commanded.copy()
+        if not newly.any():
+            return
+        q = np.clip(self.joint_state().position, self.lower, self.upper)
+        self._q_hold[newly] = q[newly]
+        self._tau_cmd[:] = 0.0
+        self._commanded[:] = False
+        self._set_held()
+
+    @property
+    def holding(self) -> bool:
+        """True when every joint is on the simulator's hold (none under commanded torque)."""
+        return not self._commanded.any()
+
     @property
     def commanded(self) -> np.ndarray:
         """(n,) bool: joints under commanded torque (the others are held)."""
@@ -365,6 +425,54 @@ class Simulator:
                 self._update_applied()
             mujoco.mj_step(m, d)
             self.steps += 1
+            v = d.qvel
+            if not v @ v < self._vmax2:  # cheap pre-check (NaN fails it too)
+                self._check_speed()
+            elif self.steps % _SNAPSHOT_EVERY == 0:
+                self._keep_good_state()
+
+    # ------------------------------------------------------------------ divergence guard
+    def _check_speed(self) -> None:
+        """Recover if a dof is faster than ``divergence_speed`` or not finite."""
+        v = np.abs(self.data.qvel)
+        bad = np.flatnonzero(~(v < self._vmax))
+        if bad.size == 0:
+            return
+        i = int(bad[np.argmax(np.nan_to_num(v[bad], nan=np.inf))])
+        name = self.model.joint(int(self.model.dof_jntid[i])).name
+        self.recover(f"speed {v[i]:.3g} of dof {i} (joint {name!r}) is beyond "
+                     f"divergence_speed {self._vmax:g}")
+
+    def _keep_good_state(self) -> None:
+        """Keep the current state as the last good one if it is finite and every joint is
+        within its limits (plus a margin)."""
+        d = self.data
+        q = d.qpos[self._qadr]
+        lo, hi = self.lower[self._jidx], self.upper[self._jidx]
+        if (np.all(np.isfinite(d.qpos)) and np.all(q > lo - _SNAPSHOT_LIMIT_MARGIN)
+                and np.all(q < hi + _SNAPSHOT_LIMIT_MARGIN)):
+            np.copyto(self._good_qpos, d.qpos)
+            self._good_time = float(d.time)
+
+    def recover(self, reason: str) -> Divergence:
+        """Recover from a divergence (module doc): the last good state at rest, scripted
+        wrenches cleared, every joint on hold at the restored posture; time goes on.
+        Returns the :class:`Divergence` (also in :attr:`last_divergence`)."""
+        m, d = self.model, self.data
+        t = float(d.time) if np.isfinite(d.time) else self._good_time
+        mujoco.mj_resetData(m, d)  # clears velocities, accelerations, warnings, xfrc_applied
+        d.time = t
+        np.copyto(d.qpos, self._good_qpos)
+        mujoco.mj_forward(m, d)
+        self._applied.clear()
+        self._xfrc_dirty = False
+        self._q_hold = np.clip(self.joint_state().position, self.lower, self.upper)
+        self._tau_cmd = np.zeros(self.n)
+        self._commanded = np.zeros(self.n, dtype=bool)
+        self._set_held()
+        self.divergences += 1
+        self.last_divergence = Divergence(t, reason, self._good_time, self.divergences)
+        return self.last_divergence
 
     def _update_applied(self) -> None:
         d = self.data
@@ -484,24 +592,44 @@ class Simulator:
         nq = np.linalg.norm(q)
         if nq < 1e-9:
             raise InvalidInput(f"object pose: quaternion {q.tolist()} has zero norm")
+        r = float(np.linalg.norm(p))
+        if r > self.config.object_workspace_radius:
+            raise InvalidInput(
+                f"object pose: position {p.tolist()} is {r:.3g} m from root_link; expected "
+                f"within object_workspace_radius {self.config.object_workspace_radius:g} m")
+        if p[2] < self.floor_height:
+            raise InvalidInput(f"object pose: position z = {p[2]:g} m is below the floor "
+                               f"(z = {self.floor_height:g} m)")
         _, qa, da = self._objects[name]
         self.data.qpos[qa:qa + 3] = p
         self.data.qpos[qa + 3:qa + 7] = q / nq
         self.data.qvel[da:da + 6] = 0.0
         mujoco.mj_forward(self.model, self.data)
+        self._keep_good_state()
 
     def apply_wrench(self, target: str, force: Sequence[float], torque: Sequence[float],
                      duration: float) -> None:
         """Apply ``force`` [N] and ``torque`` [N m] (root_link axes) at the origin of a frame
-        (site) or at a body's origin, for ``duration`` [s] of simulated time."""
+        (site) or at a body's origin, for ``duration`` [s] of simulated time. Raises
+        :class:`InvalidInput` beyond ``max_wrench_force`` / ``max_wrench_torque`` /
+        ``max_wrench_duration`` (``SimConfig``) and changes nothing."""
         f = np.asarray(force, dtype=float).reshape(-1)
         tq = np.asarray(torque, dtype=float).reshape(-1)
         if f.size != 3 or tq.size != 3 or not (np.all(np.isfinite(f)) and
                                                np.all(np.isfinite(tq))):
             raise InvalidInput(f"apply_wrench: need finite force (3,) and torque (3,), got "
                                f"{f.tolist()}, {tq.tolist()}")
-        if not np.isfinite(duration) or duration <= 0.0:
-            raise InvalidInput(f"apply_wrench: duration must be > 0 s, got {duration}")
+        cfg = self.config
+        if not np.isfinite(duration) or duration <= 0.0 or duration > cfg.max_wrench_duration:
+            raise InvalidInput(f"apply_wrench: duration must be in (0, {cfg.max_wrench_duration:g}]"
+                               f" s (max_wrench_duration), got {duration:g}")
+        for what, vec, limit, unit, param in (
+                ("force", f, cfg.max_wrench_force, "N", "max_wrench_force"),
+                ("torque", tq, cfg.max_wrench_torque, "N m", "max_wrench_torque")):
+            mag = float(np.linalg.norm(vec))
+            if mag > limit:
+                raise InvalidInput(f"apply_wrench: |{what}| = {mag:.4g} {unit} is beyond "
+                                   f"{param} {limit:g} {unit}")
         m, d = self.model, self.data
         sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, target)
         if sid >= 0:

@@ -125,6 +125,22 @@ def test_estimate_watchdog_turns_the_torque_loop_off(base):
     np.testing.assert_allclose(out.tau, out.tau_d)
 
 
+def test_time_going_back_forgets_the_estimate_of_the_old_timeline(base):
+    """A restarted simulator (joint states at t = 0.001 s after t = 5 s): the estimate of
+    t = 5 s is forgotten (it is not 'fresh' with a negative age) and the torque loop waits
+    for a new one; an estimate of the new timeline closes it again."""
+    c = _ctl(base, estimate_timeout=0.01)
+    q = _rest(c)
+    names = c.model.joint_names
+    c.step(5.0, q, np.zeros(c.n))
+    c.set_estimate(5.0, names, np.zeros(len(names)))
+    assert c.step(5.001, q, np.zeros(c.n)).status == "ok"
+    out = c.step(0.001, q, np.zeros(c.n))
+    assert out.status == "no_estimate" and c.estimate_age(0.001) == -1.0
+    c.set_estimate(0.001, names, np.zeros(len(names)))
+    assert c.step(0.002, q, np.zeros(c.n)).status == "ok"
+
+
 def test_joint_state_watchdog_trips_to_a_safe_hold(base):
     """No joint state for state_timeout: check_watchdog trips once, aborts the trajectory,
     refuses new ones; the next joint state resumes with a hold at that posture."""

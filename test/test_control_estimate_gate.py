@@ -40,3 +40,14 @@ def test_a_held_joint_state_is_released_after_the_wall_time_timeout(fake_clock):
     fake_clock.t += 0.06
     assert gate.expired(0.1) == "js7"
     assert not gate.holding and gate.expired(0.1) is None
+
+
+def test_after_reset_a_joint_state_waits_for_its_own_estimate_again():
+    """The clock went back (a restarted simulator): the old newest estimate (198 s) no longer
+    answers the new joint states, which wait for the estimates of their own stamps."""
+    gate = EstimateGate()
+    gate.estimate(198_000 * MS)
+    assert gate.offer(1 * MS, "js1") == "js1"  # without reset: passed at once, unanswered
+    gate.reset()
+    assert gate.offer(2 * MS, "js2") is None and gate.holding
+    assert gate.estimate(2 * MS) == "js2"

@@ -49,6 +49,19 @@ def test_buffers_keep_only_the_newest_items():
     assert s.match(2 * MS).primary == "js2"
 
 
+def test_after_a_jump_back_the_buffers_keep_the_new_stamps():
+    """The earliest received go first, not the smallest stamps: items of a restarted clock
+    (t = 1, 2 ms after t = 198 s) stay buffered and complete their samples."""
+    s = _sync(buffer=2)
+    s.add("left", 198_000 * MS, "old")
+    s.add("left", 198_001 * MS, "old")
+    for t in (1, 2):
+        s.add("left", t * MS, f"l{t}")
+        s.add("right", t * MS, f"r{t}")
+    s.add_primary(2 * MS, "js2")
+    assert s.match(2 * MS).secondary == {"left": "l2", "right": "r2"}
+
+
 def test_latest_pairs_with_the_newest_items_unless_stale():
     s = _sync()
     with pytest.raises(InvalidInput, match="no left item"):

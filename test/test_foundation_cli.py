@@ -2,23 +2,15 @@
 
 from __future__ import annotations
 
-import subprocess
 import sys
 
 import pytest
 import yaml
 
 from icub_pmp.kinematics import RobotSpec
-from icub_pmp.testing import NodeProcess, repo_root
+from icub_pmp.testing import NodeProcess, repo_root, run_icub
 
-ICUB = [str(repo_root() / "scripts/env.sh"), "icub"]
-
-
-def icub(*args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
-    """Run `scripts/env.sh icub ARGS` in the session's domain (inherited environment)."""
-    return subprocess.run(
-        [*ICUB, *args], capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL
-    )
+icub = run_icub  # `scripts/env.sh icub ARGS` in the session's domain
 
 
 @pytest.fixture(scope="module")

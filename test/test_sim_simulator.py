@@ -178,3 +178,84 @@ def test_the_two_arms_collide_with_each_other(sim):
     left = sim.frame_pose("l_hand_dh_frame").position[1]
     right = sim.frame_pose("r_hand_dh_frame").position[1]
     assert left < right
+
+
+@pytest.mark.parametrize("target, force, torque, duration, match", [
+    ("box", [1e6, 0, 0], [0, 0, 0], 0.2, r"\|force\| = 1e\+06 N is beyond max_wrench_force"),
+    ("r_hand", [0, 0, 5], [0, 20, 0], 1.0, r"\|torque\| = 20 N m is beyond max_wrench_torque"),
+    ("box", [1, 0, 0], [0, 0, 0], 1e9, r"duration must be in \(0, 60\] s"),
+])
+def test_unphysical_wrench_rejected_and_nothing_applied(sim, target, force, torque, duration,
+                                                        match):
+    """The issue's requests (1e6 N on the box, a 1e9 s duration) and a 20 N m torque are
+    refused with a message naming the bound; nothing is applied (the box stays put)."""
+    sim.reset("rest")
+    p0 = sim.object_pose("box").position
+    with pytest.raises(InvalidInput, match=match):
+        sim.apply_wrench(target, force, torque, duration)
+    sim.step(200)
+    np.testing.assert_allclose(sim.object_pose("box").position, p0, atol=1e-3)
+
+
+def test_object_pose_out_of_the_workspace_rejected(sim):
+    """An object 1e6 m away or below the floor is refused with a message; it stays put."""
+    sim.reset("rest")
+    p0 = sim.object_pose("cylinder").position
+    with pytest.raises(InvalidInput, match="object_workspace_radius 1.5 m"):
+        sim.set_object_pose("cylinder", [1e6, 0.0, 0.0])
+    with pytest.raises(InvalidInput, match="below the floor"):
+        sim.set_object_pose("cylinder", [-0.3, 0.0, -1.0])
+    np.testing.assert_allclose(sim.object_pose("cylinder").position, p0, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def unbounded_sim():
+    """A simulator that accepts the issue's 1e6 N push (bounds raised on purpose)."""
+    from icub_sim_bridge import SimConfig, Simulator
+
+    return Simulator(SimConfig(cameras_enabled=False, max_wrench_force=1e7))
+
+
+@pytest.mark.parametrize("target", ["r_hand_dh_frame", "box"])
+def test_divergence_recovered_once_time_monotonic(unbounded_sim, target):
+    """A 1e6 N push makes the physics diverge: it is detected and recovered from once (not a
+    reset loop), simulated time never goes back, the robot is back at the last good state
+    within its joint limits and on hold, the push is cleared (the box is back on the table)."""
+    sim = unbounded_sim
+    sim.reset("rest")
+    sim.step(250)
+    rest = sim.joint_state().position
+    box = sim.object_pose("box").position
+    before = sim.divergences
+    sim.apply_wrench(target, [1e6, 0.0, 0.0], [0.0, 0.0, 0.0], 0.2)
+    times = []
+    for _ in range(1000):
+        sim.step()
+        times.append(sim.time)
+    assert sim.divergences == before + 1
+    d = sim.last_divergence
+    assert "divergence_speed" in d.reason and d.restored_time <= d.time
+    assert np.all(np.diff(times) > 0)  # never back (MuJoCo's auto-reset rewinds to 0)
+    st = sim.joint_state()
+    assert np.all(st.position >= sim.lower - 0.01) and np.all(st.position <= sim.upper + 0.01)
+    np.testing.assert_allclose(st.position, rest, atol=0.02)
+    assert sim.holding
+    np.testing.assert_allclose(sim.object_pose("box").position, box, atol=1e-3)
+
+
+def test_hold_keeps_the_posture_and_a_command_releases_it(sim):
+    """hold() (the fallback when commands stop) keeps the commanded joints where they are
+    against gravity; the next command hands the joints it names back to the torque."""
+    sim.reset("rest")
+    sim.command_all(np.zeros(sim.n))  # limp: the arms start to fall
+    sim.step(50)
+    sim.hold()
+    assert sim.holding
+    q = sim.joint_state().position
+    sim.step(1000)
+    np.testing.assert_allclose(sim.joint_state().position, q, atol=0.02)
+    i = sim.indices(["l_shoulder_pitch"])[0]
+    sim.command(["l_shoulder_pitch"], [0.0])
+    assert not sim.holding and sim.commanded.sum() == 1
+    sim.step(300)
+    assert sim.joint_state().position[i] > q[i] + 0.05  # falls again: released

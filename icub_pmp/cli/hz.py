@@ -7,7 +7,8 @@ import time
 
 import numpy as np
 
-from icub_pmp.cli.session import cli_node, spin_until, wait_for_topic_type
+from icub_pmp.cli.defaults import DISCOVERY_TIMEOUT
+from icub_pmp.cli.session import cli_node, not_ready_reason, spin_until, wait_for_topic_type
 from icub_pmp.ros.msg_types import get_interface
 from icub_pmp.ros.qos import matching_qos
 
@@ -21,7 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--window", "-w", type=int, default=10000, help="last N intervals")
     p.add_argument("--duration", type=float, default=0.0,
                    help="measure this long [s], print once and exit (default: until Ctrl-C)")
-    p.add_argument("--timeout", type=float, default=10.0, help="wait for a publisher [s]")
+    p.add_argument("--timeout", type=float, default=DISCOVERY_TIMEOUT,
+                   help=f"wait for a publisher [s] (default {DISCOVERY_TIMEOUT:g})")
     p.set_defaults(func=run)
 
 
@@ -57,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
     with cli_node("icub_hz") as (node, executor):
         tname = wait_for_topic_type(node, executor, topic, args.timeout)
         if tname is None:
-            raise TimeoutError(f"topic {topic} has no publisher after {args.timeout} s")
+            raise TimeoutError(not_ready_reason(node, topic, "topic", args.timeout,
+                                                "its publisher"))
         stamps: list[float] = []
 
         def cb(_raw: bytes) -> None:

@@ -3,10 +3,17 @@
     icub graph                     nodes, topics with types, services with types
     icub echo TOPIC [--count N]    print messages
     icub hz TOPIC                  measure a topic's rate
-    icub reach right=X,Y,Z ...     send a PMP reach goal to /pmp/reach
+    icub pub TOPIC TYPE [VALUES]   publish a message (ros2 topic pub)
+    icub call SERVICE [TYPE] [VALUES]       call a service (ros2 service call)
+    icub send-goal ACTION [TYPE] [VALUES]   send an action goal (ros2 action send_goal)
+    icub param list|get|set|dump   node parameters (ros2 param)
+    icub reach right=X,Y,Z ...     send a PMP reach goal to /pmp/reach_action
     icub bag record|play|info|convert   MCAP bags (rosbag2 layout)
 
-Each subcommand lives in its own module exposing ``register(subparsers)``; its parser sets
+VALUES use ros2cli's YAML syntax, e.g. ``"{target: box, wrench: {force: {z: 1.0}}}"``.
+
+Each subcommand lives in its own module (``send-goal`` in ``send_goal``) exposing
+``register(subparsers)``; its parser sets
 ``func(args) -> int``. Errors print one line ``icub: error: ...`` and exit non-zero.
 """
 
@@ -14,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from typing import Sequence
 
@@ -21,7 +29,8 @@ from icub_pmp.errors import IcubPmpError
 
 __all__ = ["main", "build_parser"]
 
-SUBCOMMANDS = ("graph", "echo", "hz", "reach", "bag")
+#: subcommand modules of icub_pmp.cli, in the order of ``icub --help``
+SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "bag")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -44,7 +53,14 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``icub`` console script."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    # positionals after an option (`icub send-goal ACTION -f VALUES`): argparse stops its
+    # list at the option; verbs that allow it name the list in `extra_positionals`
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        dest = getattr(args, "extra_positionals", None)
+        if dest is None or any(e.startswith("-") and not _is_number(e) for e in extra):
+            parser.error(f"unrecognized arguments: {' '.join(extra)}")
+        setattr(args, dest, [*getattr(args, dest), *extra])
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
@@ -52,9 +68,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:  # the reader went away (icub ... | head): not an error
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - nothing more reaches the pipe
+        return 0
     except (IcubPmpError, TimeoutError, ValueError, OSError) as exc:
         print(f"icub: error: {exc}", file=sys.stderr)
         return 1
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -20,6 +20,7 @@ import math
 import sys
 from dataclasses import dataclass, field
 
+from icub_pmp.cli.defaults import DISCOVERY_TIMEOUT
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 
@@ -43,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``reach`` subcommand."""
     p = sub.add_parser(
         "reach",
-        help="send a PMP reach goal to /pmp/reach",
+        help="send a PMP reach goal (/pmp/reach_action) and wait for the arrival",
         description="HAND=X,Y,Z[,QW,QX,QY,QZ] per hand (left, right); positions in metres.",
     )
     p.add_argument("targets", nargs="+", metavar="HAND=X,Y,Z[,QW,QX,QY,QZ]")
@@ -60,8 +61,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "1 cm)")
     p.add_argument("--service", default="/pmp/reach")
     p.add_argument("--action", default="/pmp/reach_action")
-    p.add_argument("--timeout", type=float, default=20.0,
-                   help="wait this long for the planner to be discovered [s]")
+    p.add_argument("--timeout", type=float, default=DISCOVERY_TIMEOUT,
+                   help="wait this long for the planner to be discovered [s] (default "
+                        f"{DISCOVERY_TIMEOUT:g})")
     p.set_defaults(func=run)
 
 
@@ -151,13 +153,12 @@ def _run_action(args: argparse.Namespace, goal: ReachArgs) -> int:
 
     from icub_interfaces.action import Reach as ReachAction
     from icub_pmp.cli.progress import ProgressLine
-    from icub_pmp.cli.session import cli_node, not_ready_reason, spin_until
+    from icub_pmp.cli.session import cli_node, spin_until, spin_until_ready
 
     with cli_node("icub_reach") as (node, executor):
         client = ActionClient(node, ReachAction, args.action)
-        if not spin_until(executor, client.server_is_ready, args.timeout):
-            raise TimeoutError(not_ready_reason(node, args.action, "action", args.timeout,
-                                                "pmp_planner"))
+        spin_until_ready(node, executor, client.server_is_ready, args.timeout, args.action,
+                         "action", "pmp_planner")
         bar = ProgressLine(sys.stderr)
 
         def on_feedback(msg) -> None:
@@ -202,14 +203,13 @@ def _run_action(args: argparse.Namespace, goal: ReachArgs) -> int:
 
 def _run_service(args: argparse.Namespace, goal: ReachArgs) -> int:
     from icub_interfaces.srv import Reach
-    from icub_pmp.cli.session import cli_node, not_ready_reason, spin_until
+    from icub_pmp.cli.session import cli_node, spin_until, spin_until_ready
 
     request = build_request(goal)
     with cli_node("icub_reach") as (node, executor):
         client = node.create_client(Reach, args.service)
-        if not spin_until(executor, client.service_is_ready, args.timeout):
-            raise TimeoutError(not_ready_reason(node, args.service, "service", args.timeout,
-                                                "pmp_planner"))
+        spin_until_ready(node, executor, client.service_is_ready, args.timeout, args.service,
+                         "service", "pmp_planner")
         future = client.call_async(request)
         if not spin_until(executor, future.done, max(args.timeout, 60.0)):
             raise TimeoutError(f"service {args.service} gave no answer")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import sys
 import time
 import uuid
 from typing import Callable, Iterator
@@ -13,7 +14,8 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "not_ready_reason"]
+__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "offered_types", "type_mismatch",
+           "discover", "not_ready_reason", "spin_until_ready"]
 
 
 @contextlib.contextmanager
@@ -42,9 +44,20 @@ def spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool], timeo
 
 
 def not_ready_reason(node: Node, name: str, kind: str, timeout: float, server: str) -> str:
-    """Why a service or action ``name`` was not ready after ``timeout`` s: either nothing in
-    the graph offers it (with the hint ``server``: which node should), or it exists but this
-    client was not matched with it yet (discovery is slow on a loaded machine)."""
+    """Why a service, action or topic ``name`` was not ready after ``timeout`` s: either
+    nothing in the graph offers it (with the hint ``server``: which node should), or it
+    exists but this client was not matched with it yet (discovery is slow on a loaded
+    machine). ``kind``: 'service', 'action' or 'topic' (a topic is offered by a publisher)."""
+    domain = os.environ.get("ROS_DOMAIN_ID", "0")
+    if kind == "topic":
+        if node.count_publishers(name) > 0:
+            return (f"topic {name} has a publisher in the graph but no message arrived "
+                    f"after {timeout:g} s (not matched yet on a loaded machine, or nothing "
+                    "published: retry, or give a longer --timeout)")
+        subs = node.count_subscribers(name)
+        known = f" ({subs} subscriber(s) wait for it)" if subs else ""
+        return (f"topic {name} has no publisher after {timeout:g} s in ROS_DOMAIN_ID "
+                f"{domain}{known} (is {server} running?)")
     if kind == "action":
         probe = f"{name}/_action/send_goal"
     else:
@@ -53,9 +66,24 @@ def not_ready_reason(node: Node, name: str, kind: str, timeout: float, server: s
         return (f"{kind} {name} exists in the graph but was not matched after {timeout:g} s "
                 f"(DDS discovery is slow on a loaded machine: retry, or give a longer "
                 f"--timeout)")
-    domain = os.environ.get("ROS_DOMAIN_ID", "0")
     return (f"{kind} {name} not available after {timeout:g} s: no node offers it in "
             f"ROS_DOMAIN_ID {domain} (is {server} running?)")
+
+
+def spin_until_ready(node: Node, executor: SingleThreadedExecutor, ready: Callable[[], bool],
+                     timeout: float, name: str, kind: str, server: str,
+                     note_after: float = 3.0) -> None:
+    """Spin until ``ready()``; after ``note_after`` s say once on stderr what is awaited
+    (discovery can take seconds right after a node starts); after ``timeout`` s raise
+    TimeoutError with :func:`not_ready_reason`."""
+    if spin_until(executor, ready, min(note_after, timeout)):
+        return
+    if timeout > note_after:
+        print(f"icub: waiting for {kind} {name} (up to {timeout:g} s)...", file=sys.stderr,
+              flush=True)
+        if spin_until(executor, ready, timeout - note_after):
+            return
+    raise TimeoutError(not_ready_reason(node, name, kind, timeout, server))
 
 
 def wait_for_topic_type(
@@ -73,3 +101,41 @@ def wait_for_topic_type(
 
     spin_until(executor, check, timeout)
     return found[0] if found else None
+
+
+def offered_types(node: Node, name: str, kind: str) -> list[str]:
+    """The types under which the graph offers service or action ``name`` (actions as
+    'pkg/action/Type'); empty when nothing offers it yet."""
+    probe = f"{name}/_action/send_goal" if kind == "action" else name
+    for n, types in node.get_service_names_and_types():
+        if n == probe:
+            if kind == "action":
+                return [t[: -len("_SendGoal")] for t in types if t.endswith("_SendGoal")]
+            return list(types)
+    return []
+
+
+def type_mismatch(node: Node, name: str, kind: str, wanted: str) -> str | None:
+    """A one-line error when the graph offers ``name`` only under other types than
+    ``wanted`` ('pkg/srv/Type'), else None (not offered yet, or offered as ``wanted``)."""
+    types = offered_types(node, name, kind)
+    if not types or wanted in types:
+        return None
+    return f"{kind} {name} has type {', '.join(types)}, not {wanted}"
+
+
+def discover(node: Node, executor: SingleThreadedExecutor, name: str, kind: str,
+             wanted: str | None, timeout: float, server: str) -> str:
+    """The type ('pkg/srv/Type', 'pkg/action/Type') under which the graph offers service or
+    action ``name``, once it does (TimeoutError with :func:`not_ready_reason` after
+    ``timeout`` s). With ``wanted`` given, ValueError when the graph offers it only under
+    other types. Call it before creating the client: a client adds its own type to the
+    graph."""
+    spin_until_ready(node, executor, lambda: bool(offered_types(node, name, kind)), timeout,
+                     name, kind, server)
+    if wanted is not None:
+        mismatch = type_mismatch(node, name, kind, wanted)
+        if mismatch:
+            raise ValueError(mismatch)
+        return wanted
+    return offered_types(node, name, kind)[0]

@@ -56,6 +56,11 @@ class EstimateGate(Generic[T]):
             return held[1]
         return None
 
+    def reset(self) -> None:
+        """Forget the newest estimate and the held joint state (the clock went back)."""
+        self.estimate_ns = -1
+        self._held = None
+
     def expired(self, timeout: float) -> T | None:
         """The held joint state once it has waited more than ``timeout`` [s] of wall time
         (released: it is answered without its estimate), else None."""

@@ -327,6 +327,9 @@ class ImpedanceController:
                     g.finish(GoalCode.SAFE_HOLD, "time went back (simulator reset): motion "
                              "stopped", self._q, self.setpoints.q, self._t)
                 self._goals = []
+                if self._est_t is not None and self._est_t > t:  # from the old timeline
+                    self._est_t = None
+                    self._est_mask[:] = False
             self.setpoints.hold(q, t)
             self._pid.reset()
             self._t = None

@@ -10,7 +10,8 @@ Two policies, as wholeBodyDynamics reads its ports:
   secondary stream, unless one is older than ``stale_timeout`` (:meth:`latest`).
 
 In both, a stamp is processed at most once and never one older than the last processed
-(:meth:`release`). Buffers hold at most ``buffer`` items per stream (the oldest go first).
+(:meth:`release`). Buffers hold at most ``buffer`` items per stream (the earliest received
+go first: after a clock jump back the new, smaller stamps are kept, not evicted).
 :meth:`reset` forgets everything, e.g. when the clock jumps back.
 """
 
@@ -78,7 +79,7 @@ class StampSynchroniser(Generic[T]):
     def _put(self, buf: dict[int, T], stamp_ns: int, item: T) -> None:
         buf[stamp_ns] = item
         if len(buf) > self.buffer:
-            del buf[min(buf)]
+            del buf[next(iter(buf))]  # the earliest received (dicts keep insertion order)
 
     # ------------------------------------------------------------------ pairing
     def match(self, stamp_ns: int) -> SyncedSample[T] | None:

@@ -128,14 +128,22 @@ class WrenchEstimator:
 
     def reset(self) -> None:
         """Forget filter states, contact flags and the offset calibration (not the RFRR)."""
+        self.clear_history()
+        self.calibrate_offsets()
+        self._samples = 0
+
+    def clear_history(self) -> None:
+        """Forget what is ordered in time (joint-state, FT and IMU filters, contact flags)
+        when the clock went back (a restarted simulator): the next :meth:`update` starts
+        afresh at its own time. The FT offsets (a property of the sensors) and the learnt RFRR
+        stay."""
         self._filter.reset()
         for f in self._ft_filter.values():
             f.reset()
         self._imu_filter.reset()
         for c in self._contact.values():
             c.reset()
-        self.calibrate_offsets()
-        self._samples = 0
+        self._last_contact = {h: False for h in HANDS}
 
     def calibrate_offsets(self) -> None:
         """Restart the FT offset calibration (``ft_offset_samples`` contact-free samples)."""

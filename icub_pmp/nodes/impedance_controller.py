@@ -30,7 +30,11 @@ controller keeps running. Watchdogs: a 20 Hz timer on the node clock (simulated 
 wall time (the simulator is paused or gone: simulated time has stopped, so only wall time can
 tell); estimates older than ``estimate_timeout`` switch the torque loop off and none for
 ``estimate_lost_timeout`` latches a safe hold. Each is logged once and shown on the status
-topic. All :class:`ImpedanceControllerConfig` parameters can change at run time (validated).
+topic. A joint state older than the newest (a restarted simulator: simulated time went back,
+:class:`~icub_pmp.time_jump_detector.TimeJumpDetector`) ends the running goals, drops the old
+timeline's estimate and the lockstep estimate gate and holds the measured posture; it is said
+in the log. All :class:`ImpedanceControllerConfig` parameters can change at run time
+(validated).
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ import numpy as np
 from builtin_interfaces.msg import Time
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
@@ -59,18 +63,19 @@ from icub_pmp.ros.conversions import (
 )
 from icub_pmp.ros.node_runner import spin_node
 from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.qos import LATCHED_QOS
 from icub_pmp.ros.raw_messages import (
     RawJointStateReader,
     RawJointStateWriter,
     read_joint_state,
 )
 from icub_pmp.ros.trajectory_action_server import TrajectoryActionServer
+from icub_pmp.ros.warning_throttle import WarningThrottle
+from icub_pmp.time_jump_detector import TimeJumpDetector
 
 __all__ = ["ImpedanceControllerNode", "main"]
 
 _TRAJ_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-_STATUS_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class ImpedanceControllerNode(Node):
@@ -87,6 +92,8 @@ class ImpedanceControllerNode(Node):
         self._js_idx: np.ndarray | None = None
         self._est_names: list[str] | None = None
         self.gate: EstimateGate[tuple[float, np.ndarray, np.ndarray, Time]] = EstimateGate()
+        self.clock = TimeJumpDetector()  # the joint states' time going back
+        self.warn = WarningThrottle(self.get_logger())  # one budget per kind of warning
         self._latest: tuple[float, np.ndarray, np.ndarray] | None = None
         self._latest_new = False
         self._t_last: float | None = None
@@ -116,7 +123,7 @@ class ImpedanceControllerNode(Node):
                                  self._on_velocity, _TRAJ_QOS)
         self.create_service(Trigger, "/impedance_controller/hold", self._on_hold)
         self.pub_status = self.create_publisher(ControllerStatus, "/impedance_controller/status",
-                                                _STATUS_QOS)
+                                                LATCHED_QOS)
         self.action = TrajectoryActionServer(self, self.controller, lambda: self._t_last)
         self.create_timer(0.05, self._on_watchdog)
         # wall-clock watchdog: simulated time stops with the simulator, wall time does not
@@ -150,9 +157,9 @@ class ImpedanceControllerNode(Node):
             self._timer = self.create_timer(1.0 / cfg.rate_hz, self._on_timer)
 
     # ------------------------------------------------------------------ inputs
-    def _warn(self, text: str) -> None:
+    def _warn(self, kind: str, text: str) -> None:
         self.dropped += 1
-        self.get_logger().warning(text, throttle_duration_sec=2.0)
+        self.warn(kind, text)
 
     def _on_joint_state(self, data: bytes) -> None:
         try:
@@ -165,10 +172,16 @@ class ImpedanceControllerNode(Node):
                 raise InvalidInput("JointState has no velocities")
         except IcubPmpError as exc:
             self._js_names = None
-            self._warn(f"/joint_states dropped: {exc}")
+            self._warn("joint_state", f"/joint_states dropped: {exc}")
             return
         ns = msg.stamp_ns
         self._js_wall = time.monotonic()
+        jump = self.clock.observe(ns)
+        if jump is not None:  # a restarted simulator: nothing of the old timeline holds
+            self.gate.reset()
+            self.get_logger().warning(
+                f"{jump.describe()} (a simulator restart?): trajectories stopped, the old "
+                "estimate forgotten, holding the measured posture", throttle_duration_sec=1.0)
         sec, nanosec = divmod(ns, 1_000_000_000)
         stamp = Time(sec=sec, nanosec=nanosec)
         cfg = self.controller.config
@@ -192,7 +205,7 @@ class ImpedanceControllerNode(Node):
             ns = msg.stamp_ns
             self.controller.set_estimate(ns * 1e-9, msg.name, tau)
         except IcubPmpError as exc:
-            self._warn(f"/estimated_joint_torques dropped: {exc}")
+            self._warn("estimate", f"/estimated_joint_torques dropped: {exc}")
             return
         sample = self.gate.estimate(ns)
         if sample is not None:
@@ -225,7 +238,7 @@ class ImpedanceControllerNode(Node):
             self.controller.set_velocity_command(list(msg.name), np.asarray(msg.velocity),
                                                  self._t_last)
         except IcubPmpError as exc:
-            self._warn(f"/impedance_controller/velocity_command rejected: {exc}")
+            self._warn("velocity", f"/impedance_controller/velocity_command rejected: {exc}")
 
     def _on_hold(self, request: Trigger.Request, response: Trigger.Response
                  ) -> Trigger.Response:
@@ -288,7 +301,7 @@ class ImpedanceControllerNode(Node):
     def _on_pending_timeout(self) -> None:
         sample = self.gate.expired(self.controller.config.estimate_timeout)
         if sample is not None:
-            self._warn("no estimate for the pending joint state: answered without it")
+            self._warn("pending", "no estimate for the pending joint state: answered without it")
             self._step(*sample)
 
     def _on_watchdog(self) -> None:
@@ -305,7 +318,7 @@ class ImpedanceControllerNode(Node):
         try:
             out = self.controller.step(t, q, v)
         except IcubPmpError as exc:
-            self._warn(f"control step at t = {t:.3f} s skipped: {exc}")
+            self._warn("step", f"control step at t = {t:.3f} s skipped: {exc}")
             return
         self._t_last = t
         self.steps += 1

@@ -17,7 +17,12 @@ saves deserialising /clock at 1 kHz). Synchronisation: with ``require_same_stamp
 with the simulator) a sample is processed when the joint state and both arm FT wrenches with
 the same stamp have arrived (in any order); otherwise each joint state is processed with the
 latest FT wrenches, unless they are older than ``stale_timeout`` (then it is skipped with a
-throttled warning). Malformed messages are dropped with a throttled warning. One
+throttled warning). Malformed messages (unknown or missing joints, wrong lengths, NaN) are
+dropped on arrival with a throttled warning, before they reach the synchroniser: a bad message
+never takes the place of a good one with the same stamp. Time: a joint state older than the
+newest one means the clock went back (a restarted simulator,
+:class:`~icub_pmp.time_jump_detector.TimeJumpDetector`): the node says so, clears the
+synchroniser and the estimator's filters and contact flags, and goes on at once. One
 synchronised sample in ``sample_every`` is processed (wholeBodyDynamics runs at 100 Hz on the
 robot: ``sample_every: 10`` at 1 kHz). The joint torques are published for every processed
 sample, the other topics every ``publish_every`` processed samples. Parameters:
@@ -28,6 +33,8 @@ state is lost).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -47,11 +54,14 @@ from icub_pmp.ros.conversions import joint_state_arrays, set_wrench, wrench_to_a
 from icub_pmp.ros.node_runner import spin_node
 from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.raw_messages import (
+    RawJointState,
     RawJointStateReader,
     RawJointStateWriter,
-    raw_header_stamp_ns,
     raw_wrench_stamped,
+    read_joint_state,
 )
+from icub_pmp.ros.warning_throttle import WarningThrottle
+from icub_pmp.time_jump_detector import TimeJumpDetector
 
 __all__ = ["WrenchEstimatorNode", "main"]
 
@@ -72,15 +82,20 @@ class WrenchEstimatorNode(Node):
                                        on_change=self._on_config_change)
         self.estimator = WrenchEstimator(self.config)
         self.names = list(self.estimator.joint_names)
-        self._cached_names: list[str] | None = None
+        self._cached_names: list[str] | None = None  # the name list of self._idx
+        self._valid_names: list[str] | None = None  # the name list last checked on arrival
         self._js_reader = RawJointStateReader()  # joint states read from their bytes
         self._idx: np.ndarray | None = None
-        self.sync: StampSynchroniser[bytes] = StampSynchroniser(
+        # joint states and FT wrenches are checked on arrival and buffered read (arrays)
+        self.sync: StampSynchroniser[object] = StampSynchroniser(
             [_FT_KEY[h] for h in HANDS], _BUFFER)
+        self.clock = TimeJumpDetector()
         self._imu: np.ndarray | None = None
         self._seen = 0
         self.samples = 0
         self.dropped = 0
+        self.jumps = 0
+        self.warn = WarningThrottle(self.get_logger())  # one budget per kind of warning
 
         sd = qos_profile_sensor_data
         self.pub_tau = self.create_publisher(JointState, "/estimated_joint_torques", sd)
@@ -148,22 +163,26 @@ class WrenchEstimatorNode(Node):
             self._imu = None
 
     # ------------------------------------------------------------------ inputs
-    def _warn(self, text: str) -> None:
+    def _warn(self, kind: str, text: str) -> None:
         self.dropped += 1
-        self.get_logger().warning(text, throttle_duration_sec=2.0)
-
-    def _stamp(self, data: bytes, topic: str) -> int | None:
-        try:
-            return raw_header_stamp_ns(data)
-        except IcubPmpError as exc:
-            self._warn(f"{topic}: message dropped: {exc}")
-            return None
+        self.warn(kind, text)
 
     def _on_ft(self, hand: str, data: bytes) -> None:
-        ns = self._stamp(data, _FT_KEY[hand])
-        if ns is None:
+        try:
+            try:  # the numbers straight from the bytes (raw_messages), else deserialise
+                ns, w = raw_wrench_stamped(data)
+            except InvalidInput:
+                m = deserialize_message(data, WrenchStamped)
+                ns = m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+                w = wrench_to_array(m.wrench)
+        except Exception as exc:  # a corrupt serialised message
+            self._warn("ft", f"{_FT_KEY[hand]}: message dropped: cannot read it: {exc}")
             return
-        self.sync.add(_FT_KEY[hand], ns, data)
+        if not np.all(np.isfinite(w)):
+            self._warn("ft", f"{_FT_KEY[hand]}: message at t = {ns * 1e-9:.3f} s dropped: "
+                       "NaN or infinite wrench")
+            return
+        self.sync.add(_FT_KEY[hand], ns, w)
         if self.config.require_same_stamp and self.sync.has_primary(ns):
             self._try(ns)
 
@@ -173,20 +192,51 @@ class WrenchEstimatorNode(Node):
         if np.all(np.isfinite(acc)):
             self._imu = acc
 
+    def _read_joint_state(self, data: bytes) -> RawJointState:
+        """The joint state of ``data``, checked (raises InvalidInput): every joint of the
+        model named (checked once per distinct name list), fields as long as the names,
+        finite values."""
+        msg = read_joint_state(self._js_reader, data)
+        if msg.name is not self._valid_names:
+            joint_state_arrays(msg, self.names)  # names, lengths and values checked
+            self._valid_names = msg.name
+            return msg
+        n = len(msg.name)
+        if len(msg.position) != n or len(msg.velocity) not in (0, n):
+            raise InvalidInput(f"JointState has {len(msg.position)} positions and "
+                               f"{len(msg.velocity)} velocities for {n} names")
+        if not (math.isfinite(msg.position @ msg.position)
+                and math.isfinite(msg.velocity @ msg.velocity)):
+            raise InvalidInput("JointState contains NaN or infinite values")
+        return msg
+
     def _on_joint_state(self, data: bytes) -> None:
-        ns = self._stamp(data, "/joint_states")
-        if ns is None:
+        try:
+            msg = self._read_joint_state(data)
+        except IcubPmpError as exc:
+            self._warn("joint_state", f"/joint_states: a message dropped on arrival: {exc}")
             return
+        ns = msg.stamp_ns
+        jump = self.clock.observe(ns)
+        if jump is not None:
+            self.sync.reset()
+            self.estimator.clear_history()
+            self._seen = 0
+            self.jumps += 1
+            self.get_logger().warning(
+                f"{jump.describe()} (a simulator restart?): stamp synchroniser, filters and "
+                "contact flags cleared; estimating again from this sample",
+                throttle_duration_sec=1.0)
         if self.config.require_same_stamp:
-            self.sync.add_primary(ns, data)
+            self.sync.add_primary(ns, msg)
             self._try(ns)
             return
         try:
             ft = self.sync.latest(ns, self.config.stale_timeout)
         except InvalidInput as exc:
-            self._warn(f"joint state at t = {ns * 1e-9:.3f} s skipped: {exc}")
+            self._warn("pairing", f"joint state at t = {ns * 1e-9:.3f} s skipped: {exc}")
             return
-        self._process(ns, data, {h: ft[_FT_KEY[h]] for h in HANDS})
+        self._process(ns, msg, {h: ft[_FT_KEY[h]] for h in HANDS})
 
     def _try(self, ns: int) -> None:
         """Process stamp ``ns`` if the joint state and both FT wrenches are there."""
@@ -195,49 +245,23 @@ class WrenchEstimatorNode(Node):
             self._process(ns, sample.primary, {h: sample.secondary[_FT_KEY[h]] for h in HANDS})
 
     # ------------------------------------------------------------------ processing
-    @staticmethod
-    def _deserialize(js_data: bytes, ft_data: dict[str, bytes]
-                     ) -> tuple[JointState, dict[str, np.ndarray]]:
-        """The general path (e.g. big-endian data): rclpy's deserialiser."""
-        msg = deserialize_message(js_data, JointState)
-        ft = {h: wrench_to_array(deserialize_message(ft_data[h], WrenchStamped).wrench)
-              for h in HANDS}
-        return msg, ft
-
-    def _process(self, ns: int, js_data: bytes, ft_data: dict[str, bytes]) -> None:
-        """Deserialise and process one synchronised sample (one in ``sample_every``)."""
+    def _process(self, ns: int, msg: RawJointState, ft: dict[str, np.ndarray]) -> None:
+        """Process one synchronised, checked sample (one in ``sample_every``)."""
         if not self.sync.release(ns):  # processed already, or older than the last sample
             return
         self._seen += 1
         if (self._seen - 1) % self.config.sample_every:
             return
         try:
-            try:  # the numbers straight from the bytes (raw_messages), else deserialise
-                msg = self._js_reader.read(js_data)
-                ft = {h: raw_wrench_stamped(ft_data[h])[1] for h in HANDS}
-            except InvalidInput:
-                msg, ft = self._deserialize(js_data, ft_data)
-            for h in HANDS:
-                if not np.all(np.isfinite(ft[h])):
-                    raise InvalidInput(f"/ft/{_FT_TOPIC[h]}: NaN or infinite wrench")
-        except IcubPmpError as exc:
-            self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
-            return
-        except Exception as exc:  # a corrupt serialised message
-            self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: cannot deserialise: {exc}")
-            return
-        try:
-            if msg.name != self._cached_names:
-                self._idx = None
-                self._cached_names = list(msg.name)
+            if msg.name is not self._cached_names:  # the index of this name list
+                self._idx, self._cached_names = None, msg.name
             q, v, self._idx = joint_state_arrays(msg, self.names, self._idx)
             imu = self._imu if self.config.gravity_source == "imu" else None
             if self.config.gravity_source == "imu" and imu is None:
                 raise InvalidInput("gravity_source is imu but no /imu message arrived yet")
             est = self.estimator.update(ns * 1e-9, q, v, ft, imu)
         except IcubPmpError as exc:
-            self._cached_names = None
-            self._warn(f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
+            self._warn("sample", f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
             return
         self.samples += 1
         # serialised directly (raw_messages): the names are encoded once

@@ -1,12 +1,17 @@
-"""QoS matching: a subscription profile compatible with the publishers of a topic (used by the
-recorder and the CLI's echo and hz)."""
+"""QoS profiles: a subscription profile compatible with the publishers of a topic (used by the
+recorder and the CLI's echo and hz), and the latched profile of status topics."""
 
 from __future__ import annotations
 
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-__all__ = ["matching_qos"]
+__all__ = ["matching_qos", "LATCHED_QOS"]
+
+#: status and description topics: reliable, the latest kept for late subscribers (the ROS
+#: "latched" topic: /robot_description, /impedance_controller/status, /sim/status)
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def matching_qos(node: Node, topic: str, depth: int = 100) -> QoSProfile:

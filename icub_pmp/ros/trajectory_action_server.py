@@ -2,7 +2,10 @@
 (``/impedance_controller/follow_joint_trajectory``, icub_interfaces/action/
 FollowJointTrajectory), an adapter over :meth:`ImpedanceController.execute`.
 
-Every goal is accepted; a goal that cannot start (unknown joints, NaN, points beyond the joint
+Every goal is accepted. A goal that arrives before the controller's first joint state (right
+after a restart the action server is often discovered before the simulator's joint states
+reach the controller) waits for it up to ``FIRST_STATE_TIMEOUT`` of wall time. A goal that
+cannot start (unknown joints, NaN, points beyond the joint
 limits, faster than the joints' velocity/acceleration limits, a safe hold) ends at once with
 ``INVALID_GOAL`` / ``INVALID_JOINTS`` and the reason in ``error_string``, so a client always
 learns why. A running goal ends as its :class:`~icub_pmp.control.trajectory_goal.
@@ -17,6 +20,7 @@ from __future__ import annotations
 from typing import Callable
 
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.task import Future
 
@@ -26,9 +30,12 @@ from icub_pmp.control.trajectory_goal import GoalCode, GoalOutcome, TrajectoryGo
 from icub_pmp.errors import IcubPmpError, UnknownName
 from icub_pmp.ros.conversions import time_to_sec, trajectory_extras, trajectory_to_arrays
 
-__all__ = ["TrajectoryActionServer", "ACTION_NAME"]
+__all__ = ["TrajectoryActionServer", "ACTION_NAME", "FIRST_STATE_TIMEOUT"]
 
 ACTION_NAME = "/impedance_controller/follow_joint_trajectory"
+#: how long a goal that came before the first joint state waits for it [s] of wall time
+#: (a restarted node matched the simulator after up to ~4 s at load 10: bench/cli_discovery.py)
+FIRST_STATE_TIMEOUT = 10.0
 
 
 class TrajectoryActionServer:
@@ -41,6 +48,7 @@ class TrajectoryActionServer:
         self.controller = controller
         self.now = now
         self._running: dict[int, tuple[TrajectoryGoal, object, Future]] = {}
+        self._first_state: list[Future] = []  # goals waiting for the first joint state
         self._steps = 0
         self.server = ActionServer(
             node, FollowJointTrajectory, name, execute_callback=self._execute,
@@ -52,10 +60,13 @@ class TrajectoryActionServer:
         goal = handle.request
         result = FollowJointTrajectory.Result()
         result.joint_names = list(goal.trajectory.joint_names)
+        t_now = self.now()
+        if t_now is None:
+            t_now = await self._wait_first_state()
         try:
-            t_now = self.now()
             if t_now is None:
-                raise IcubPmpError("no joint state received yet")
+                raise IcubPmpError(f"no joint state received within {FIRST_STATE_TIMEOUT:g} s "
+                                   "of wall time (is the simulator running?)")
             names, times, pos, vel = trajectory_to_arrays(goal.trajectory,
                                                           self.controller.joint_names)
             acc, eff = trajectory_extras(goal.trajectory)
@@ -90,10 +101,28 @@ class TrajectoryActionServer:
                                            f"{outcome.message}")
         return result
 
+    async def _wait_first_state(self) -> float | None:
+        """The time of the first joint state once it came, None after FIRST_STATE_TIMEOUT."""
+        fut: Future = Future()
+        self._first_state.append(fut)
+        timer = self.node.create_timer(
+            FIRST_STATE_TIMEOUT, lambda: fut.done() or fut.set_result(None),
+            clock=Clock(clock_type=ClockType.STEADY_TIME))
+        try:
+            await fut
+        finally:
+            self.node.destroy_timer(timer)
+        return self.now()
+
     # ------------------------------------------------------------------ from the loop
     def resolve(self, feedback: bool = False) -> None:
         """Complete the goals that ended, act on cancel requests and (``feedback``) publish
         the running goals' feedback. Call after every control step and safe hold."""
+        if self._first_state and self.now() is not None:
+            for fut in self._first_state:
+                if not fut.done():
+                    fut.set_result(None)
+            self._first_state.clear()
         if not self._running:
             return
         for gid, (tg, handle, done) in list(self._running.items()):

@@ -26,6 +26,7 @@ from icub_pmp.ros.conversions.stamps import (
     duration_to_sec,
     sec_to_duration,
     sec_to_time,
+    time_to_ns,
     time_to_sec,
 )
 from icub_pmp.ros.conversions.trajectories import (
@@ -37,6 +38,7 @@ from icub_pmp.ros.conversions.trajectories import (
 
 __all__ = [
     "time_to_sec",
+    "time_to_ns",
     "sec_to_time",
     "sec_to_duration",
     "duration_to_sec",
