@@ -1,4 +1,4 @@
-"""Benchmark of the gaze controller (issue 20): fixation accuracy and settling time in the
+"""Benchmark of the gaze controller: fixation accuracy and settling time in the
 simulator through the real controller loop, and the motion segmenter's F1 while the head
 tracks a moving object.
 

@@ -1,4 +1,4 @@
-"""Benchmark of the peripersonal-space models (issue 19): maps, shared space, imagined collisions.
+"""Benchmark of the peripersonal-space models: maps, shared space, imagined collisions.
 
     scripts/env.sh python bench/peripersonal.py --quick     # 30 reach pairs, < 2 min
     scripts/env.sh python bench/peripersonal.py             # 120 reach pairs

@@ -1,4 +1,4 @@
-"""Benchmark of seeing and reaching (issue 23): the hand lands above the object the eyes found,
+"""Benchmark of seeing and reaching: the hand lands above the object the eyes found,
 judged against the object in the physics.
 
     scripts/env.sh python bench/vision_reach.py --quick    # 5 trials

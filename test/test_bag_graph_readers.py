@@ -1,4 +1,4 @@
-"""Every bag the project writes opens in the readers roboticists use (issue 15).
+"""Every bag the project writes opens in the readers roboticists use.
 
 Bags are recorded from the running graph (simulator in lockstep without cameras, controller,
 estimator, PMP planner, robot_state_publisher for /tf) while a /pmp/reach service call, a
@@ -221,7 +221,7 @@ def test_services_and_actions_recorded_on_request(recorded):
 
 
 def old_event_definition(defs: MessageDefinitions, service: str) -> str:
-    """The service-event schema this project wrote before issue 15: ros2msg, the request and
+    """The service-event schema older versions of this project wrote: ros2msg, the request and
     response types named 'pkg/Srv_Request' (no srv part), which neither reader accepts."""
     pkg, _, srv = service.split("/")
     event = f"{pkg}/srv/{srv}_Event"

@@ -57,8 +57,8 @@ def _topic(defs: MessageDefinitions, name: str, msgtype: str, **kw) -> BagTopic:
 
 
 def old_event_definition(defs: MessageDefinitions, srv: str = "Reach") -> str:
-    """The service-event schema written before issue 15 (ros2msg; request and response types
-    named 'pkg/Srv_Request', without their srv part)."""
+    """The service-event schema of older versions of this project (ros2msg; request and
+    response types named 'pkg/Srv_Request', without their srv part)."""
     event = f"icub_interfaces/srv/{srv}_Event"
     defs._texts[event] = (f"service_msgs/ServiceEventInfo info\n{srv}_Request[<=1] request\n"
                           f"{srv}_Response[<=1] response\n")
