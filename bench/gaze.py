@@ -55,11 +55,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from motion import _roi  # noqa: E402  (bench/motion.py: the grid region it scores F1 in)
 
+from icub_pmp.baselines.segmentation_metrics import SegmentationCounts  # noqa: E402
 from icub_pmp.baselines.synthetic_sequence import triangle_wave  # noqa: E402
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
 from icub_pmp.gaze import GazeController, GazePlan  # noqa: E402
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, project_point  # noqa: E402
-from icub_pmp.vision import MotionSegmenter, MotionSegmenterConfig, SegmentationCounts  # noqa: E402
+from icub_pmp.vision import MotionSegmenter, MotionSegmenterConfig  # noqa: E402
 from icub_sim_bridge.harness.sequence_generator import SequenceGenerator  # noqa: E402
 from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
 

@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import subprocess
+import sys
+
+import pytest
 
 from icub_pmp.testing import repo_root
 
@@ -37,3 +41,13 @@ def test_the_registry_names_existing_benchmarks():
     ra = _run_all()
     for name in ra.load_registry():
         assert (repo_root() / "bench" / f"{name}.py").exists(), name
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in (repo_root() / "bench").glob("*.py")))
+def test_every_benchmark_starts(name):
+    """Each bench/<name>.py imports what it uses and parses its options (``--help``): a moved
+    module breaks the benchmark here, not in the next ``make bench``."""
+    proc = subprocess.run([sys.executable, str(repo_root() / "bench" / f"{name}.py"), "--help"],
+                          cwd=repo_root(), capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "--quick" in proc.stdout or name == "run_all", proc.stdout[-500:]
