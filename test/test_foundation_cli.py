@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import time
 
 import pytest
 import yaml
@@ -48,12 +49,27 @@ def test_echo_receives_real_messages(posture_node, ros_probe):
 
 
 def test_hz_within_ten_percent_of_publisher_rate(posture_node, ros_probe):
-    """`icub hz` reports the publisher's 100 Hz within 10 %."""
+    """`icub hz` reports the rate the publisher achieved (its 100 Hz timer, fewer on a loaded
+    machine: measured from the message stamps over the same window) within 10 %."""
+    from sensor_msgs.msg import JointState
+
     assert ros_probe.wait_for_topic("/joint_states", 20)
-    out = icub("hz", "/joint_states", "--duration", "3")
+    seen: list[tuple[float, float]] = []  # (arrival [s, wall], stamp [s])
+    sub = ros_probe.node.create_subscription(
+        JointState, "/joint_states",
+        lambda m: seen.append((time.monotonic(),
+                               m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec)), 10)
+    try:
+        out = icub("hz", "/joint_states", "--duration", "3")
+        t_end = time.monotonic()
+    finally:
+        ros_probe.destroy(sub)
     assert out.returncode == 0, out.stderr
     rate = float(out.stdout.split("average rate:")[1].split("Hz")[0])
-    assert 90.0 <= rate <= 110.0, out.stdout
+    window = [stamp for arrival, stamp in seen if arrival >= t_end - 3.0]
+    assert len(window) > 10, f"{len(seen)} messages seen by the probe"
+    achieved = (len(window) - 1) / (window[-1] - window[0])
+    assert abs(rate - achieved) <= 0.1 * achieved, (out.stdout, achieved)
 
 
 @pytest.fixture(scope="module")
