@@ -56,6 +56,7 @@ from icub_pmp.ros.joint_state_cache import JointStateCache
 from icub_pmp.ros.node_runner import spin_node
 from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
+from icub_pmp.ros.trajectory_action_server import FIRST_STATE_TIMEOUT
 
 __all__ = ["GazeControllerNode", "main"]
 
@@ -133,11 +134,19 @@ class GazeControllerNode(Node):
             PointStamped, topic, self._on_tracking_target, qos_profile_sensor_data)
 
     # ------------------------------------------------------------------ inputs
-    def _joints(self) -> tuple[float, dict[str, float]]:
-        """(time [s], {joint: position [rad]}) of the latest joint states."""
+    def _joints(self, wait: float = 0.0) -> tuple[float, dict[str, float]]:
+        """(time [s], {joint: position [rad]}) of the latest joint states; before the first
+        one arrived, waits up to ``wait`` s of wall time for it (a request right after
+        start-up, while DDS is still matching the joint-state subscription)."""
         js = self._listener.latest()
+        deadline = time.monotonic() + wait
+        while js is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+            js = self._listener.latest()
         if js is None:
-            raise InvalidInput("no /joint_states received yet: the head posture is unknown")
+            when = f"within {wait:g} s" if wait else "yet"
+            raise InvalidInput(f"no /joint_states received {when}: the head posture is unknown "
+                               "(is sim_bridge running?)")
         return js.t, js.positions
 
     def _target_in_root(self, msg: PointStamped, joints: dict[str, float]) -> np.ndarray:
@@ -154,7 +163,7 @@ class GazeControllerNode(Node):
     def _look(self, msg: PointStamped, neck_traj_time: float | None, tracking: bool
               ) -> tuple[_Active, str]:
         """Plan toward the message's point, publish it; returns the plan and a note."""
-        now, joints = self._joints()
+        now, joints = self._joints(wait=0.0 if tracking else FIRST_STATE_TIMEOUT)
         target = self._target_in_root(msg, joints)
         act = self._active
         start = previous = None
