@@ -69,6 +69,7 @@ from icub_pmp.ros.node_runner import run_node
 from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.pmp_node_config import PmpNodeConfig
 from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
+from icub_pmp.ros.trajectory_action_server import FIRST_STATE_TIMEOUT
 
 __all__ = ["PmpPlannerNode", "main"]
 
@@ -133,6 +134,7 @@ class PmpPlannerNode(Node):
     # ------------------------------------------------------------------ joint states
     def _current_state(self) -> dict[str, float] | None:
         timeout = self.node_config.joint_state_timeout
+        self.joint_states.wait_for_first(FIRST_STATE_TIMEOUT)
         st = self.joint_states.latest()
         if st is None:
             return None

@@ -144,6 +144,14 @@ class JointStateCache:
                                          dict(zip(m.name, m.position.tolist())), wall)
             return self._cached
 
+    def wait_for_first(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s of wall time for the first sample (a request right after
+        start-up, while DDS is still matching the subscription); True once one arrived."""
+        deadline = time.monotonic() + timeout
+        while self._data is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        return self._data is not None
+
     def wall_age(self) -> float:
         """Wall time since the last sample arrived [s] (inf before the first)."""
         return time.monotonic() - self._wall if self._data is not None else float("inf")
