@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 
 import yaml
 
@@ -45,40 +44,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Validate the request, wait for the server, call once, print the response."""
-    from icub_pmp.cli.session import cli_node, discover, spin_until, spin_until_ready
-    from icub_pmp.cli.yaml_values import (
-        full_name,
-        interface_name,
-        parse_values,
-        split_type_and_values,
-    )
-    from icub_pmp.ros.msg_types import (
-        get_interface,
-        message_to_dict,
-        set_message_fields,
-        type_name,
-    )
+    from icub_pmp.cli.session import cli_node, connect_typed, spin_until, typed_values
+    from icub_pmp.ros.msg_types import message_to_dict
 
-    service = full_name(args.service)
-    tname, text = split_type_and_values(args.args)
-    values = parse_values(text)
-    srv_type = None
-    if tname is not None:  # checked before anything is sent
-        srv_type = get_interface(interface_name(tname, "srv"))
-        request = set_message_fields(srv_type.Request(), values)
+    typed = typed_values(args.service, args.args, "service")
+    service = typed.name
     with cli_node("icub_call") as (node, executor):
-        # the graph's type first: our own client would add its type to the graph
-        deadline = time.monotonic() + args.timeout
-        found = discover(node, executor, service, "service",
-                         None if srv_type is None else type_name(srv_type), args.timeout,
-                         "its server")
-        if srv_type is None:
-            srv_type = get_interface(found)
-            request = set_message_fields(srv_type.Request(), values)
-        client = node.create_client(srv_type, service)
-        remaining = max(1e-3, deadline - time.monotonic())
-        spin_until_ready(node, executor, client.service_is_ready, remaining, service, "service",
-                         "its server", note_after=remaining)
+        client = connect_typed(node, executor, typed,
+                               lambda srv: node.create_client(srv, service), args.timeout)
+        request = typed.message
         print(f"requester: making request: {request!r}", file=sys.stderr)
         future = client.call_async(request)
         if not spin_until(executor, future.done, args.response_timeout):

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 
 import yaml
 
@@ -60,36 +59,15 @@ def run(args: argparse.Namespace) -> int:
     """Validate the goal, wait for the server, send, print feedback and the result."""
     from rclpy.action import ActionClient
 
-    from icub_pmp.cli.session import cli_node, discover, spin_until, spin_until_ready
-    from icub_pmp.cli.yaml_values import (
-        full_name,
-        interface_name,
-        parse_values,
-        split_type_and_values,
-    )
-    from icub_pmp.ros.msg_types import get_interface, set_message_fields, type_name
+    from icub_pmp.cli.session import cli_node, connect_typed, spin_until, typed_values
 
-    action = full_name(args.action)
-    tname, text = split_type_and_values(args.args)
-    values = parse_values(text)
-    action_type = None
-    if tname is not None:  # checked before anything is sent
-        action_type = get_interface(interface_name(tname, "action"))
-        goal = set_message_fields(action_type.Goal(), values)
+    typed = typed_values(args.action, args.args, "action")
+    action = typed.name
     with cli_node("icub_send_goal") as (node, executor):
         print("Waiting for an action server to become available...", flush=True)
-        # the graph's type first: our own client would add its type to the graph
-        deadline = time.monotonic() + args.timeout
-        found = discover(node, executor, action, "action",
-                         None if action_type is None else type_name(action_type), args.timeout,
-                         "its server")
-        if action_type is None:
-            action_type = get_interface(found)
-            goal = set_message_fields(action_type.Goal(), values)
-        client = ActionClient(node, action_type, action)
-        remaining = max(1e-3, deadline - time.monotonic())
-        spin_until_ready(node, executor, client.server_is_ready, remaining, action, "action",
-                         "its server", note_after=remaining)
+        client = connect_typed(node, executor, typed,
+                               lambda act: ActionClient(node, act, action), args.timeout)
+        goal = typed.message
         print(f"Sending goal:\n{_dump(goal)}", flush=True)
 
         def on_feedback(msg) -> None:

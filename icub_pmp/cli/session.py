@@ -7,15 +7,17 @@ import os
 import sys
 import time
 import uuid
-from typing import Callable, Iterator
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator
 
 import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-__all__ = ["cli_node", "spin_until", "wait_for_topic_type", "offered_types", "type_mismatch",
-           "discover", "not_ready_reason", "spin_until_ready"]
+__all__ = ["cli_node", "TypedValues", "typed_values", "connect_typed", "spin_until",
+           "wait_for_topic_type", "offered_types", "type_mismatch", "discover",
+           "not_ready_reason", "spin_until_ready"]
 
 
 @contextlib.contextmanager
@@ -139,3 +141,62 @@ def discover(node: Node, executor: SingleThreadedExecutor, name: str, kind: str,
             raise ValueError(mismatch)
         return wanted
     return offered_types(node, name, kind)[0]
+
+
+@dataclass
+class TypedValues:
+    """A service request or action goal given on the command line: its full name, its type
+    (``None`` until the graph says it) and the message filled from the YAML values."""
+
+    name: str
+    kind: str
+    values: dict
+    interface: Any = None
+    message: Any = None
+
+    def fill(self, interface: Any) -> None:
+        """Bind the type and fill its request/goal (ValueError naming a bad field)."""
+        from icub_pmp.ros.msg_types import set_message_fields
+
+        self.interface = interface
+        part = interface.Request if self.kind == "service" else interface.Goal
+        self.message = set_message_fields(part(), self.values)
+
+
+def typed_values(name: str, args: list[str], kind: str) -> TypedValues:
+    """``NAME [TYPE] [VALUES]`` of ``icub call``/``send-goal``, checked before anything is
+    sent: bad YAML, an unknown type or a bad field raise ValueError here."""
+    from icub_pmp.cli.yaml_values import (
+        full_name,
+        interface_name,
+        parse_values,
+        split_type_and_values,
+    )
+    from icub_pmp.ros.msg_types import get_interface
+
+    tname, text = split_type_and_values(args)
+    typed = TypedValues(full_name(name), kind, parse_values(text))
+    if tname is not None:
+        typed.fill(get_interface(interface_name(tname, "srv" if kind == "service" else kind)))
+    return typed
+
+
+def connect_typed(node: Node, executor: SingleThreadedExecutor, typed: TypedValues,
+                  make_client: Callable[[Any], Any], timeout: float) -> Any:
+    """Wait for the server of ``typed`` (its type from the graph when not given), fill the
+    message, create the client with ``make_client(interface)`` and wait until it is matched;
+    the whole wait is bounded by ``timeout`` s. Returns the client."""
+    from icub_pmp.ros.msg_types import get_interface, type_name
+
+    deadline = time.monotonic() + timeout
+    # the graph's type first: our own client would add its type to the graph
+    wanted = None if typed.interface is None else type_name(typed.interface)
+    found = discover(node, executor, typed.name, typed.kind, wanted, timeout, "its server")
+    if typed.interface is None:
+        typed.fill(get_interface(found))
+    client = make_client(typed.interface)
+    ready = client.service_is_ready if typed.kind == "service" else client.server_is_ready
+    remaining = max(1e-3, deadline - time.monotonic())
+    spin_until_ready(node, executor, ready, remaining, typed.name, typed.kind, "its server",
+                     note_after=remaining)
+    return client
