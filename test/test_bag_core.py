@@ -1,4 +1,5 @@
-"""Bag files without a ROS graph: rosbag2 layout, official readers, crash recovery, damage."""
+"""Bag files without a ROS graph: rosbag2 layout, official readers, crash recovery, damage,
+repair of an interrupted recording, a write the file system refuses."""
 
 from __future__ import annotations
 
@@ -10,14 +11,16 @@ from pathlib import Path
 import pytest
 import yaml
 from geometry_msgs.msg import WrenchStamped
+from mcap.reader import make_reader
 from rclpy.serialization import deserialize_message, serialize_message
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability
 from rosbags.interfaces import QosTime as T
 from sensor_msgs.msg import Image, JointState
 from std_msgs.msg import String
 
-from icub_pmp.bags import BagReader, BagStatus, BagWriter, MessageDefinitions
+from icub_pmp.bags import BagReader, BagRepair, BagStatus, BagWriter, MessageDefinitions
 from icub_pmp.errors import BagError
+from icub_pmp.testing import repo_root
 
 BEST_EFFORT = Qos(QosHistory.KEEP_LAST, 5, QosReliability.BEST_EFFORT, QosDurability.VOLATILE,
                   T(0, 0), T(0, 0), QosLiveliness.AUTOMATIC, T(0, 0), False)
@@ -272,3 +275,132 @@ def test_bag_core_imports_no_ros():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
+
+
+# -------------------------------------------------------------------- repair
+def _unclosed(tmp_path, n_flushed: int = 3000, n_after: int = 500):
+    """A bag as SIGKILL leaves it: ``n_flushed`` messages flushed, more in memory, no end."""
+    msgs = _messages(2000)
+    w = _write(tmp_path / "rec", msgs[:n_flushed], close=False)
+    w.flush()
+    for topic, t, m in msgs[n_flushed:n_flushed + n_after]:
+        w.write(w.topics[topic], t, serialize_message(m))
+    crashed = tmp_path / "crashed"
+    shutil.copytree(tmp_path / "rec", crashed)
+    w.close()
+    return crashed, msgs
+
+
+def _rosbag2_count(path) -> int:
+    from rosbags.rosbag2 import Reader
+
+    with Reader(path) as r:
+        return sum(1 for _ in r.messages())
+
+
+def test_repair_in_place_finalises_an_unclosed_bag(tmp_path):
+    """Every flushed message survives, in order and decodable; rosbags' rosbag2 Reader (which
+    refuses the unclosed bag) and the official MCAP reader's summary open the repaired one; the
+    original is kept beside it."""
+    crashed, msgs = _unclosed(tmp_path)
+    before = list(BagReader(crashed).messages())
+    assert len(before) >= 3000
+    with pytest.raises(FileNotFoundError, match="metadata"):  # rosbag2 readers refuse it
+        _rosbag2_count(crashed)
+    result = BagRepair(crashed).run()
+    assert result.repaired and result.status_before == BagStatus.UNCLOSED
+    assert result.path == crashed and result.damaged_kept_at == tmp_path / "crashed.damaged"
+    assert (result.damaged_kept_at).is_dir()
+    reader = BagReader(crashed)
+    assert reader.status == BagStatus.CLOSED
+    after = list(reader.messages())
+    assert [(m.topic, m.log_time, m.data) for m in after] == \
+        [(m.topic, m.log_time, m.data) for m in before]
+    assert _rosbag2_count(crashed) == len(after)
+    with open(next(crashed.glob("*.mcap")), "rb") as fh:
+        stats = make_reader(fh).get_summary().statistics
+    assert stats.message_count == len(after)
+    for m, (topic, ts, orig) in zip(after, msgs):
+        assert (m.topic, m.log_time) == (topic, ts)
+        assert deserialize_message(m.data, TYPES[topic]) == orig
+
+
+def test_repair_of_a_cut_file_names_the_cut_and_keeps_the_readable_prefix(tmp_path):
+    crashed, _ = _unclosed(tmp_path)
+    f = next(crashed.glob("*.mcap"))
+    with open(f, "r+b") as fh:  # cut inside the last chunk
+        fh.truncate(f.stat().st_size - 777)
+    readable = sum(1 for _ in BagReader(crashed).messages())
+    out = tmp_path / "fixed"
+    result = BagRepair(crashed, out).run()
+    assert result.cut and "at byte" in result.cut[0]
+    assert result.damaged_kept_at is None and crashed.exists()  # -o leaves the input alone
+    assert _rosbag2_count(out) == readable == result.stats.total
+
+
+def test_repair_leaves_a_clean_bag_alone_and_refuses_bad_paths(tmp_path):
+    crashed, _ = _unclosed(tmp_path)
+    BagRepair(crashed).run()
+    again = BagRepair(crashed).run()
+    assert not again.repaired and again.status_before == BagStatus.CLOSED
+    with pytest.raises(BagError, match="does not exist"):
+        BagRepair(tmp_path / "nope")
+    with pytest.raises(BagError, match="exists already"):
+        BagRepair(crashed, tmp_path / "crashed.damaged")
+    junk = tmp_path / "junk"
+    junk.mkdir()
+    (junk / "x.mcap").write_bytes(b"not an mcap file at all")
+    with pytest.raises(BagError):
+        BagRepair(junk).run()
+    assert (junk / "x.mcap").exists()  # nothing moved when the repair cannot start
+
+
+def test_cli_repair_then_info_says_closed(tmp_path):
+    crashed, _ = _unclosed(tmp_path)
+    env_sh = str(repo_root() / "scripts" / "env.sh")
+    run = subprocess.run([env_sh, "icub", "bag", "repair", str(crashed)], capture_output=True,
+                         text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert "repaired (unclosed)" in run.stdout and "crashed.damaged" in run.stdout
+    info = subprocess.run([env_sh, "icub", "bag", "info", str(crashed)], capture_output=True,
+                          text=True, timeout=120)
+    assert info.returncode == 0 and "closed cleanly" in info.stdout
+    bad = subprocess.run([env_sh, "icub", "bag", "repair", str(tmp_path / "missing")],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and "icub: error:" in bad.stderr
+    assert "Traceback" not in bad.stderr
+
+
+WRITE_UNDER_LIMIT = r"""
+import resource, sys
+from icub_pmp.bags import BagWriter
+from icub_pmp.errors import BagError
+resource.setrlimit(resource.RLIMIT_FSIZE, (3_000_000, 3_000_000))  # Python ignores SIGXFSZ
+w = BagWriter(sys.argv[1])
+h = w.add_topic("/blob", "std_msgs/msg/String")
+cdr = bytes([0, 1, 0, 0, 101, 0, 0, 0]) + b"x" * 100 + bytes(1)  # a String of 100 'x'
+try:
+    for k in range(60000):
+        w.write(h, 1_000_000_000 + k * 1_000_000, cdr)
+except BagError as exc:
+    print("BagError:", exc)
+    sys.exit(3)
+sys.exit(0)
+"""
+
+
+def test_a_refused_write_is_a_clear_error_and_the_bag_repairs(tmp_path):
+    """A file size limit (what a full disk does to a write) stops the writer with a BagError
+    naming the file and the cause; the chunks written before it are repaired into a bag."""
+    bag = tmp_path / "full"
+    run = subprocess.run([sys.executable, "-c", WRITE_UNDER_LIMIT, str(bag)],
+                         capture_output=True, text=True, timeout=120, cwd=repo_root())
+    assert run.returncode == 3, run.stdout + run.stderr
+    assert "cannot write to" in run.stdout and "File too large" in run.stdout
+    assert "readable up to its last complete chunk" in run.stdout
+    assert "Traceback" not in run.stderr
+    result = BagRepair(bag).run()
+    assert result.repaired and result.stats.total > 1000
+    assert all(m.data == bytes([0, 1, 0, 0, 101, 0, 0, 0]) + b"x" * 100 + bytes(1)
+               for m in BagReader(bag).messages())
+    assert _rosbag2_count(bag) == result.stats.total

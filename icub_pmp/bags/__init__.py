@@ -5,12 +5,14 @@ schema and type hash of each channel, written with ``rosbags`` and read with the
 ``mcap`` records, so a stock ``ros2 bag play``, rosbags and Foxglove open it;
 :class:`ReaderCheck` tells which channels a reader cannot decode, :class:`RecordSelection`
 what a recording keeps (by default nothing a common reader cannot decode) and
-:class:`BagConverter` rewrites an older bag. The rclpy side (recording from the graph,
-replaying) is in ``icub_pmp.ros.bag_recorder`` / ``bag_player``; the CLI is ``icub bag``.
+:class:`BagConverter` rewrites an older bag, :class:`BagRepair` finalises an interrupted one.
+The rclpy side (recording from the graph, replaying) is in ``icub_pmp.ros.bag_recorder`` /
+``bag_player``; the CLI is ``icub bag``.
 """
 
 from icub_pmp.bags.bag_converter import BagConverter, ConvertResult
 from icub_pmp.bags.bag_reader import BagInfo, BagMessage, BagReader, BagStatus, BagTopic
+from icub_pmp.bags.bag_repair import BagRepair, RepairResult
 from icub_pmp.bags.bag_writer import COMPRESSIONS, BagWriter, TopicHandle, WriteStats
 from icub_pmp.bags.message_definitions import MessageDefinitions
 from icub_pmp.bags.reader_check import MCAP_ROS2, ROSBAGS, ReaderCheck, UnreadableChannel
@@ -21,6 +23,7 @@ __all__ = [
     "BagInfo",
     "BagMessage",
     "BagReader",
+    "BagRepair",
     "BagStatus",
     "BagTopic",
     "BagWriter",
@@ -31,6 +34,7 @@ __all__ = [
     "MessageDefinitions",
     "ReaderCheck",
     "RecordSelection",
+    "RepairResult",
     "TopicHandle",
     "UnreadableChannel",
     "WriteStats",

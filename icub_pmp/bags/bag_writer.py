@@ -102,6 +102,7 @@ class BagWriter:
         self._chunks_flushed = 0
         self._last_flush = time.monotonic()
         self._closed = False
+        self.write_error = ""  # why a write failed (disk full, size limit), "" while none did
 
     # ------------------------------------------------------------------ topics
     @property
@@ -151,17 +152,31 @@ class BagWriter:
     def write(self, handle: TopicHandle, log_time_ns: int, data: bytes | memoryview) -> None:
         """Append one CDR message received at ``log_time_ns`` [ns since the epoch]."""
         self._check_open()
-        self._writer.write(handle.connection, int(log_time_ns), data)
-        self._counts[handle.topic] += 1
-        if len(self._storage.chunks) != self._chunks_flushed:  # rosbags closed a 1 MiB chunk
-            self._flush_file()
+        try:
+            self._writer.write(handle.connection, int(log_time_ns), data)
+            self._counts[handle.topic] += 1
+            if len(self._storage.chunks) != self._chunks_flushed:  # rosbags closed a chunk
+                self._flush_file()
+        except OSError as exc:
+            raise self._write_failed(exc) from None
 
     def flush(self) -> None:
         """Write the pending chunk (if any) to the file now and flush the file."""
         self._check_open()
-        if self._storage.chunk.msgs:  # messages in the open chunk
-            self._storage.close_chunk()
-        self._flush_file()
+        try:
+            if self._storage.chunk.msgs:  # messages in the open chunk
+                self._storage.close_chunk()
+            self._flush_file()
+        except OSError as exc:
+            raise self._write_failed(exc) from None
+
+    def _write_failed(self, exc: OSError) -> BagError:
+        """The error of a write the file system refused (disk full, file size limit): the
+        bag keeps every chunk flushed before it."""
+        self.write_error = (f"cannot write to {self._storage.path}: "
+                            f"{exc.strerror or exc} (errno {exc.errno}); the bag is readable "
+                            "up to its last complete chunk")
+        return BagError(self.write_error)
 
     def flush_if_due(self) -> bool:
         """:meth:`flush` when ``flush_interval`` has passed since the last one."""

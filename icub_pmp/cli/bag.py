@@ -1,16 +1,20 @@
-"""``icub bag record|play|info|convert``: MCAP bags in the rosbag2 layout (``ros2 bag``).
+"""``icub bag record|play|info|convert|repair``: MCAP bags in the rosbag2 layout (``ros2 bag``).
 
     icub bag record -o DIR [TOPICS...|--all] [--all-services|--services S ...]
                     [--all-actions|--actions A ...] [--exclude RE] [--compression zstd]
     icub bag play DIR [--rate R] [--clock [HZ]] [--topics T ...] [--wait-for-subscribers]
     icub bag info DIR [--check]
     icub bag convert DIR -o NEW [the record options; default: every topic]
+    icub bag repair DIR [-o NEW] [--force]
 
 Ctrl-C (or SIGTERM) ends a recording and finalises the bag. A bag whose recording was killed
 is still readable up to its last flushed chunk; ``info`` says it was not closed cleanly and
 ``play`` replays what is readable. ``info`` names every channel a common reader (rosbags, the
 official MCAP ROS 2 decoder) cannot decode; ``convert`` writes a copy of an older bag that they
-all read. A damaged bag gives one ``icub: error:`` line.
+all read. ``repair`` finalises a bag whose recording was killed or whose file was cut (index,
+summary, footer and ``metadata.yaml``; in place the original is kept as ``DIR.damaged``), so
+that ``ros2 bag play`` and rosbags' Reader open it. A damaged bag gives one ``icub: error:``
+line. A recording that cannot write (disk full, file size limit) stops, says so and exits 1.
 """
 
 from __future__ import annotations
@@ -32,8 +36,8 @@ from icub_pmp.bags import (
     UnreadableChannel,
 )
 
-__all__ = ["register", "run_record", "run_play", "run_info", "run_convert", "format_info",
-           "format_unreadable"]
+__all__ = ["register", "run_record", "run_play", "run_info", "run_convert", "run_repair",
+           "format_info", "format_unreadable"]
 
 RECORD_EPILOG = """\
 What is recorded: the topics named, or with --all every topic (hidden ones, whose names have a
@@ -48,10 +52,11 @@ about such channels."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add the ``bag`` subcommand with ``record``, ``play``, ``info`` and ``convert``."""
+    """Add the ``bag`` subcommand with ``record``, ``play``, ``info``, ``convert`` and
+    ``repair``."""
     p = sub.add_parser("bag", help="record, replay, inspect and convert MCAP bags (rosbag2 "
                                    "layout)")
-    bag = p.add_subparsers(dest="bag_command", metavar="{record,play,info,convert}")
+    bag = p.add_subparsers(dest="bag_command", metavar="{record,play,info,convert,repair}")
     p.set_defaults(func=lambda _a: (p.print_help(), 2)[1])
 
     r = bag.add_parser("record", help="record topics into a new bag directory",
@@ -105,6 +110,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--compression", choices=COMPRESSIONS, default="none",
                    help="MCAP chunk compression (default: none)")
     c.set_defaults(func=run_convert)
+
+    rp = bag.add_parser(
+        "repair", help="finalise a bag whose recording was interrupted (index, summary, "
+                       "metadata.yaml)",
+        epilog="Every message of the complete chunks is kept, on every channel; the record cut "
+               "by the end of the file is left out and named. In place (no -o) the damaged "
+               "original stays beside the repaired bag as DIR.damaged. A bag closed cleanly "
+               "is left alone unless --force.")
+    rp.add_argument("bag", help="bag directory (or .mcap file) to repair")
+    rp.add_argument("-o", "--output", default=None,
+                    help="write the repaired bag here instead of in place")
+    rp.add_argument("--force", action="store_true",
+                    help="rewrite a bag that was closed cleanly too")
+    rp.set_defaults(func=run_repair)
 
 
 def _add_selection(p: argparse.ArgumentParser) -> None:
@@ -162,7 +181,12 @@ def run_record(args: argparse.Namespace) -> int:
         print(json.dumps({"bag": result.path, "received": result.received,
                           "written": result.written, "lost": result.lost,
                           "size_bytes": result.size_bytes, "cpu_s": round(result.cpu_s, 3),
-                          "duration_s": round(result.duration_s, 3)}), flush=True)
+                          "duration_s": round(result.duration_s, 3),
+                          "error": result.error}), flush=True)
+    if result.error:
+        print(f"icub: error: the recording stopped early: {result.error}", file=sys.stderr,
+              flush=True)
+        return 1
     return 0
 
 
@@ -240,6 +264,30 @@ def run_convert(args: argparse.Namespace) -> int:
         print(f"left out (not selected): {', '.join(result.dropped)}", flush=True)
     print(f"wrote {st.total} messages on {len(st.counts)} topics to {st.path} "
           f"({st.bytes_written / 1e6:.1f} MB)", flush=True)
+    return 0
+
+
+def run_repair(args: argparse.Namespace) -> int:
+    """Repair the bag; print what was recovered and where the original went."""
+    from icub_pmp.bags import BagRepair
+
+    result = BagRepair(args.bag, args.output, force=args.force).run()
+    if not result.repaired:
+        print(f"{args.bag} was closed cleanly: nothing to repair (--force rewrites it)",
+              flush=True)
+        return 0
+    st = result.stats
+    for topic, n in sorted(st.counts.items()):
+        print(f"  {topic}: {n}", flush=True)
+    for cut in result.cut:
+        print(f"left out: the incomplete record of {cut}", flush=True)
+    for topic in result.kept_recorded_schema:
+        print(f"note: {topic} keeps its recorded schema (the installed type differs)",
+              flush=True)
+    print(f"repaired ({result.status_before}): {st.total} messages on {len(st.counts)} "
+          f"topics in {result.path}", flush=True)
+    if result.damaged_kept_at is not None:
+        print(f"the damaged original is kept at {result.damaged_kept_at}", flush=True)
     return 0
 
 

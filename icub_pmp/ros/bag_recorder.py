@@ -20,6 +20,7 @@ import signal
 import sys
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, Iterable
 
 import rclpy
@@ -84,6 +85,7 @@ class RecordResult:
     duration_s: float  # wall time from the first subscription to the end [s]
     size_bytes: int
     cpu_s: float = 0.0  # CPU time of the recording process (user + system) [s]
+    error: str = ""  # why the recording stopped early (a write refused: disk full), else ""
 
     @property
     def total(self) -> int:
@@ -124,6 +126,7 @@ class BagRecorder(Node):
         self.use_sim_time = use_sim_time
         self.received: dict[str, int] = {}
         self.lost: dict[str, int] = {}
+        self.error = ""  # the write error that stopped the recording, "" while none
         self._subs: dict[str, Any] = {}
         self._skipped: set[str] = set()
         self._log = log or (lambda s: print(s, flush=True))
@@ -166,7 +169,7 @@ class BagRecorder(Node):
             self._subs[topic] = self.create_subscription(
                 cls,
                 topic,
-                self._make_callback(handle),
+                self._guarded(self._make_callback(handle)),
                 matching_qos(self, topic, depth=self.qos_depth),
                 raw=True,
                 event_callbacks=SubscriptionEventCallbacks(
@@ -205,6 +208,22 @@ class BagRecorder(Node):
 
         return cb
 
+    def _guarded(self, cb: Callable[[bytes], None]) -> Callable[[bytes], None]:
+        """``cb`` that stops writing at the first write the file system refuses (disk full,
+        size limit): the error is kept in :attr:`error` and logged once, the recording loop
+        ends on it, and no callback raises into the executor."""
+
+        def guarded(data: bytes) -> None:
+            if self.error:
+                return
+            try:
+                cb(data)
+            except BagError as exc:
+                self.error = str(exc)
+                self._log(f"recording stopped: {exc}")
+
+        return guarded
+
     def _make_lost_callback(self, topic: str) -> Callable[[QoSMessageLostInfo], None]:
         def cb(info: QoSMessageLostInfo) -> None:
             self.lost[topic] = int(info.total_count)
@@ -212,7 +231,13 @@ class BagRecorder(Node):
         return cb
 
     def _flush(self) -> None:
-        self.writer.flush_if_due()
+        if self.error:
+            return
+        try:
+            self.writer.flush_if_due()
+        except BagError as exc:
+            self.error = str(exc)
+            self._log(f"recording stopped: {exc}")
 
     def stop(self) -> None:
         """Destroy the subscriptions (no callback runs afterwards)."""
@@ -281,7 +306,8 @@ def record(
         t_end = time.monotonic() + duration if duration > 0 else float("inf")
         waited = time.monotonic()
         never = Future()  # spin in C++ for 0.1 s slices (many messages per Python call)
-        while not stop["why"] and ctx.ok() and time.monotonic() < t_end:
+        while (not stop["why"] and not recorder.error and ctx.ok()
+               and time.monotonic() < t_end):
             executor.spin_until_future_complete(never, timeout_sec=0.1)
             if max_wait > 0 and recorder.missing() and time.monotonic() - waited > max_wait:
                 raise BagError(
@@ -291,7 +317,7 @@ def record(
         # (at most `drain` s, so live traffic cannot keep the recording going).
         t_drain = time.monotonic() + drain
         before = -1
-        while ctx.ok() and time.monotonic() < t_drain:
+        while ctx.ok() and not recorder.error and time.monotonic() < t_drain:
             now_total = sum(recorder.received.values())
             if now_total == before:
                 break
@@ -305,22 +331,36 @@ def record(
         received = dict(recorder.received) if recorder else {}
         lost = dict(recorder.lost) if recorder else {}
         started = recorder.started if recorder else time.monotonic()
+        error = recorder.error if recorder else ""
         try:
             stats = writer.close()
+        except BagError as exc:
+            if not error:
+                raise
+            # the write refused mid-recording: the footer cannot be written either
+            log(f"the bag could not be finalised ({exc}); free space, then "
+                f"`icub bag repair {path}`")
+            stats = None
         finally:
             if recorder is not None:
                 recorder.destroy_node()
             rclpy.try_shutdown(context=ctx)
             for s, h in previous.items():
                 signal.signal(s, h)
+    if stats is None:
+        files = list(Path(path).glob("*.mcap"))
+        written, size = dict(writer.counts), sum(f.stat().st_size for f in files)
+    else:
+        written, size = dict(stats.counts), stats.bytes_written
     return RecordResult(
-        path=str(stats.path),
+        path=str(path if stats is None else stats.path),
         received=received,
-        written=dict(stats.counts),
+        written=written,
         lost=lost,
         duration_s=time.monotonic() - started,
-        size_bytes=stats.bytes_written,
+        size_bytes=size,
         cpu_s=_cpu_seconds() - cpu0,
+        error=error,
     )
 
 
