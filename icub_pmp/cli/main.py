@@ -74,6 +74,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (IcubPmpError, TimeoutError, ValueError, OSError) as exc:
         print(f"icub: error: {exc}", file=sys.stderr)
         return 1
+    except RuntimeError as exc:  # rclpy's RCLError: the ROS middleware refused to start
+        if type(exc).__name__ != "RCLError":
+            raise
+        text = " ".join(str(exc).split())
+        print(f"icub: error: ROS could not start a node: {text}", file=sys.stderr)
+        return 1
 
 
 def _is_number(text: str) -> bool:

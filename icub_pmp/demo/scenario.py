@@ -340,19 +340,7 @@ def run_demo(out_dir: Path, quick: bool = False) -> int:
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
         print(f"demo: ROS_DOMAIN_ID={domain}, output in {out_dir}", flush=True)
-        params = {
-            "sim_bridge": {"mode": "lockstep", "use_sim_time": False},
-            # stiff position tracking for the reaches (the compliant mode is the controller's
-            # default; config/impedance_controller.yaml)
-            "impedance_controller": {"lockstep": True, "use_sim_time": True, "mode": "position"},
-            "wrench_estimator": {"use_sim_time": True},
-            "pmp_planner": {"use_sim_time": True},
-            "cartesian_solver": {"use_sim_time": True},
-            "motion_segmenter": {"use_sim_time": True},
-            "gaze_controller": {"use_sim_time": True},
-            "robot_state_publisher": {"use_sim_time": True},
-        }
-        with NodeGraph(GRAPH, params, env=env) as graph:
+        with NodeGraph(GRAPH, graph_parameters(), env=env) as graph:
             recorder = NodeProcess(
                 command=[str(repo_root() / "scripts/record.sh"), "-o", str(bag_dir), "--all"],
                 env=env)
@@ -505,13 +493,41 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     return vr
 
 
+def graph_parameters() -> dict[str, dict[str, object]]:
+    """The demo's node parameters over their config files: the simulator in lockstep with the
+    controller, every other node on simulated time."""
+    return {
+        "sim_bridge": {"mode": "lockstep", "use_sim_time": False},
+        # stiff position tracking for the reaches (the compliant mode is the controller's
+        # default; config/impedance_controller.yaml)
+        "impedance_controller": {"lockstep": True, "use_sim_time": True, "mode": "position"},
+        "wrench_estimator": {"use_sim_time": True},
+        "pmp_planner": {"use_sim_time": True},
+        "cartesian_solver": {"use_sim_time": True},
+        "motion_segmenter": {"use_sim_time": True},
+        "gaze_controller": {"use_sim_time": True},
+        "robot_state_publisher": {"use_sim_time": True},
+    }
+
+
+#: box half width along y (config/sim_bridge.yaml box_size / 2) and the palm frame's offset from
+#: the box side at the pre-grasp [m]
+BOX_HALF_WIDTH = 0.10
+PREGRASP_GAP = 0.045
+
+
+def bimanual_pregrasp(box: np.ndarray) -> dict[str, np.ndarray]:
+    """Phase 1's hand targets: beside the box's two sides, at its centre height."""
+    return {"left": box + [0.0, -(BOX_HALF_WIDTH + PREGRASP_GAP), 0.0],
+            "right": box + [0.0, BOX_HALF_WIDTH + PREGRASP_GAP, 0.0]}
+
+
 def run_phases(runner: DemoRunner, quick: bool) -> list[PhaseResult]:
     """The four phases; a phase that fails does not stop the next one."""
     results: list[PhaseResult] = []
     box = runner.object_position("box")
-    half_w = 0.10  # box_size y / 2 (config/sim_bridge.yaml)
-    gap = 0.045    # palm frame to box centre plane offset at the pre-grasp [m]
-    pre = {"left": box + [0.0, -(half_w + gap), 0.0], "right": box + [0.0, half_w + gap, 0.0]}
+    half_w = BOX_HALF_WIDTH
+    pre = bimanual_pregrasp(box)
     print("demo: phase 1, bimanual PMP reach to the box", flush=True)
     results.append(runner.pmp_reach("bimanual_reach", pre, use_torso=True, tau=2.0))
 

@@ -5,5 +5,7 @@ by the demo, the tests and the benchmarks."""
 from icub_pmp.graph.node_graph import NodeGraph
 from icub_pmp.graph.node_process import NodeProcess, param_text
 from icub_pmp.graph.ros_domain import reserve_domain_id, ros_environment
+from icub_pmp.graph.veth_link import Host, VethLink, VethLinkError
 
-__all__ = ["NodeGraph", "NodeProcess", "param_text", "reserve_domain_id", "ros_environment"]
+__all__ = ["Host", "NodeGraph", "NodeProcess", "VethLink", "VethLinkError", "param_text",
+           "reserve_domain_id", "ros_environment"]

@@ -7,7 +7,7 @@ Used by the whole-graph integration tests and by the demo. Each node is a
 
 from __future__ import annotations
 
-from typing import Iterable, Mapping
+from typing import Iterable, Mapping, Sequence
 
 from icub_pmp.config import repo_root
 from icub_pmp.graph.node_process import NodeProcess, param_text
@@ -16,14 +16,17 @@ __all__ = ["NodeGraph"]
 
 
 class NodeGraph:
-    """Start ``nodes`` (names of scripts/<node>.sh) with optional per-node parameters."""
+    """Start ``nodes`` (names of scripts/<node>.sh) with optional per-node parameters;
+    ``prefix`` runs them through a command (a network namespace: :class:`VethLink`)."""
 
     def __init__(
         self,
         nodes: Iterable[str],
         parameters: Mapping[str, Mapping[str, object]] | None = None,
         env: dict[str, str] | None = None,
+        prefix: Sequence[str] = (),
     ):
+        self.prefix = list(prefix)  # e.g. ["ip", "netns", "exec", NS]: where the nodes run
         self.parameters = {k: dict(v) for k, v in (parameters or {}).items()}
         self.env = env
         self.procs: dict[str, NodeProcess] = {}
@@ -36,7 +39,7 @@ class NodeGraph:
 
     def command(self, node: str) -> list[str]:
         """The command line that starts ``node`` (its script plus parameter overrides)."""
-        cmd = [str(repo_root() / "scripts" / f"{node}.sh")]
+        cmd = [*self.prefix, str(repo_root() / "scripts" / f"{node}.sh")]
         extra = self.parameters.get(node, {})
         if extra:
             cmd.append("--ros-args")
