@@ -12,6 +12,7 @@ NODES = {
     "gaze_controller": f"{PACKAGE}.nodes.gaze_controller",
     "impedance_controller": f"{PACKAGE}.nodes.impedance_controller",
     "motion_segmenter": f"{PACKAGE}.nodes.motion_segmenter",
+    "peripersonal_space": f"{PACKAGE}.nodes.peripersonal_space",
     "pmp_planner": f"{PACKAGE}.nodes.pmp_planner",
     "posture_publisher": f"{PACKAGE}.nodes.posture_publisher",
     "robot_state_publisher": f"{PACKAGE}.nodes.robot_state_publisher",

@@ -15,6 +15,8 @@ from icub_pmp.dynamics import WrenchEstimatorConfig
 from icub_pmp.errors import ConfigError, UnknownName
 from icub_pmp.gaze import GazeControllerConfig, GazeNodeConfig
 from icub_pmp.kinematics import IcubModel, RobotSpec
+from icub_pmp.peripersonal import CollisionCheckConfig, PeripersonalConfig
+from icub_pmp.peripersonal.peripersonal_node_config import PeripersonalNodeConfig
 from icub_pmp.pmp import PmpConfig
 from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
 from icub_pmp.ros.pmp_node_config import PmpNodeConfig
@@ -28,6 +30,7 @@ NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
     "gaze_controller": (GazeControllerConfig, GazeNodeConfig),
     "impedance_controller": (ImpedanceControllerConfig,),
     "motion_segmenter": (MotionSegmenterConfig, StereoTargetConfig),
+    "peripersonal_space": (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig),
     "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig),
     "robot_state_publisher": (RobotStatePublisherConfig,),
     "sim_bridge": (SimConfig,),

@@ -8,7 +8,8 @@
     icub send-goal ACTION [TYPE] [VALUES]   send an action goal (ros2 action send_goal)
     icub param list|get|set|dump   node parameters (ros2 param)
     icub reach right=X,Y,Z ...     send a PMP reach goal to /pmp/reach_action
-    icub bag record|play|info|convert   MCAP bags (rosbag2 layout)
+    icub peri check|allocate|empty|plan-pair ...   peripersonal space queries
+    icub bag record|play|info|convert|repair   MCAP bags (rosbag2 layout)
 
 VALUES use ros2cli's YAML syntax, e.g. ``"{target: box, wrench: {force: {z: 1.0}}}"``.
 
@@ -30,7 +31,8 @@ from icub_pmp.errors import IcubPmpError
 __all__ = ["main", "build_parser"]
 
 #: subcommand modules of icub_pmp.cli, in the order of ``icub --help``
-SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "bag")
+SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "peri",
+               "bag")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -83,8 +85,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _is_number(text: str) -> bool:
+    """A number, or comma-separated numbers (a point ``-0.3,0.1,0``), not an option."""
     try:
-        float(text)
+        for part in text.split(","):
+            float(part)
     except ValueError:
         return False
     return True

@@ -18,6 +18,7 @@ import numpy as np
 from icub_pmp.errors import InvalidInput, ModelError, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.peripersonal.empty_area_finder import EmptyArea, EmptyAreaFinder
+from icub_pmp.peripersonal.gng_config import GrowingNeuralGasConfig
 from icub_pmp.peripersonal.growing_neural_gas import GrowingNeuralGas, as_points
 from icub_pmp.peripersonal.neural_activity import neural_activity
 from icub_pmp.peripersonal.peripersonal_config import PeripersonalConfig
@@ -103,6 +104,19 @@ class PeripersonalSpace:
         except (OSError, ValueError, KeyError) as exc:
             raise ModelError(f"no peripersonal maps in {d}: {exc}") from exc
         return cls({a: GrowingNeuralGas.load(map_file(d, a)) for a in HANDS}, arm_y, config)
+
+    @classmethod
+    def grow(cls, babble_samples: int, seed: int, gng_config: GrowingNeuralGasConfig | None = None,
+             config: PeripersonalConfig | None = None) -> "PeripersonalSpace":
+        """Grow both maps from ``babble_samples`` babbled hand positions per arm
+        (:func:`analytic_babbling`, seeds ``seed`` (left) and ``seed + 1`` (right))."""
+        from icub_pmp.peripersonal.analytic_babbling import analytic_babbling
+
+        maps = {}
+        for k, arm in enumerate(HANDS):
+            maps[arm] = GrowingNeuralGas(gng_config, label=arm)
+            maps[arm].fit(analytic_babbling(arm, int(babble_samples), seed=seed + k).hand)
+        return cls(maps, config=config)
 
     # ------------------------------------------------------------------ queries
     def _arm(self, arm: str) -> str:

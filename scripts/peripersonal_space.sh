@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the peripersonal_space node with config/peripersonal_space.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" peripersonal_space "$@"
