@@ -14,7 +14,7 @@ class InterfaceTally:
     ``cases``: inputs sent; ``crashes``: cases after which the serving node's process was gone;
     ``hangs``: requests or goals not answered within the interface's time budget; ``unclear``:
     rejections (success false, an error code) with an empty message; ``rejected``: clear
-    rejections; ``examples``: a few of the problems, for the failure message.
+    rejections; ``burst_hz``: the rate a topic burst reached [msg/s]; ``examples``: a few of the problems, for the failure message.
     """
 
     kind: str
@@ -25,6 +25,7 @@ class InterfaceTally:
     hangs: int = 0
     unclear: int = 0
     rejected: int = 0
+    burst_hz: float = 0.0
     examples: list[str] = dataclasses.field(default_factory=list)
 
     def note(self, what: str) -> None:

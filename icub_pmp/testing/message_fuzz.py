@@ -17,6 +17,10 @@ What a drawn message holds (the cases issue 22 lists):
   one more or one less, so a message can be well-formed enough to reach a node's deeper code;
 - ``uint8[]`` data: empty, a few bytes or as long as ``step * height`` (images).
 
+One message in three is drawn *plausible* instead: ordinary floats only, known names and
+frames only, coherent lengths, zero stamps. Those get past the first validation and reach a
+node's deeper code (planning, solving, executing), where bugs hide behind valid inputs.
+
 Pure Python + hypothesis; imports message modules by name only (no rclpy node).
 """
 
@@ -103,8 +107,12 @@ def _int_strategy(typename: str) -> st.SearchStrategy[int]:
     return st.one_of(st.sampled_from(edges), st.integers(max(lo, -5), min(hi, 1000)))
 
 
-def _names_strategy(vocab: FuzzVocabulary) -> st.SearchStrategy[list[str]]:
+def _names_strategy(vocab: FuzzVocabulary, plausible: bool = False
+                    ) -> st.SearchStrategy[list[str]]:
     known = list(vocab.joint_names) or ["joint"]
+    if plausible:
+        return st.one_of(st.just(known),
+                         st.lists(st.sampled_from(known), min_size=1, max_size=8, unique=True))
     return st.one_of(
         st.just(known),                                              # the full, valid set
         st.lists(st.sampled_from(known), max_size=8, unique=True),   # a valid subset
@@ -122,7 +130,7 @@ class _Draw:
         self.draw = draw
         self.vocab = vocab
         self.n_names: int | None = None
-        self.image_bytes: int | None = None
+        self.plausible = draw(st.sampled_from([False, False, True]))
 
     def message(self, cls: type) -> Any:
         msg = cls()
@@ -138,11 +146,14 @@ class _Draw:
 
     def _time(self, msg: Any, duration: bool) -> Any:
         d = self.draw
-        if duration:
+        if self.plausible:
+            msg.sec, msg.nanosec = (1 if duration else 0), 0
+        elif duration:
             msg.sec = d(st.sampled_from([0, 1, -1, -100, 2**31 - 1, -2**31]))
         else:
             msg.sec = d(st.sampled_from([0, 1, 10, 1_000_000_000, 2**31 - 1, -1, -2**31]))
-        msg.nanosec = d(st.sampled_from([0, 500_000_000, 999_999_999, 2**32 - 1]))
+        if not self.plausible:
+            msg.nanosec = d(st.sampled_from([0, 500_000_000, 999_999_999, 2**32 - 1]))
         return msg
 
     def value(self, name: str, slot: Any, siblings: dict[str, Any]) -> Any:
@@ -161,7 +172,7 @@ class _Draw:
         bound = slot.maximum_size if isinstance(slot, d.BoundedSequence) else None
         if isinstance(vt, d.AbstractGenericString):
             if name in _NAME_FIELDS:
-                names = self.draw(_names_strategy(self.vocab))
+                names = self.draw(_names_strategy(self.vocab, self.plausible))
                 self.n_names = len(names)
                 return names[:bound] if bound else names
             n = self.draw(st.integers(0, self.vocab.max_sequence))
@@ -178,6 +189,8 @@ class _Draw:
         return [self.scalar(name, vt) for _ in range(n)]
 
     def _length(self) -> int:
+        if self.plausible and self.n_names is not None:
+            return self.n_names
         choices = [0, 1, 3]
         if self.n_names is not None:
             k = self.n_names
@@ -200,10 +213,10 @@ class _Draw:
         if isinstance(slot, d.AbstractGenericString):
             return self._string(name, slot)
         t = slot.typename
-        if t in ("double", "long double"):
-            return self.draw(_float_strategy(False))
-        if t == "float":
-            return self.draw(_float_strategy(True))
+        if t in ("double", "long double", "float"):
+            if self.plausible:
+                return self.draw(st.floats(-1.0, 1.0, width=32 if t == "float" else 64))
+            return self.draw(_float_strategy(t == "float"))
         if t == "boolean":
             return self.draw(st.booleans())
         if t == "char":
@@ -212,20 +225,26 @@ class _Draw:
             return bytes([self.draw(_int_strategy("octet"))])
         if t in _INT_RANGES:
             if name in ("height", "width", "step"):
-                return self.draw(st.sampled_from([0, 1, 2, 4, 12, 240, 320, 960, 2**32 - 1]))
+                sizes = [2, 4, 12] if self.plausible else [0, 1, 2, 4, 12, 240, 320, 960,
+                                                           2**32 - 1]
+                return self.draw(st.sampled_from(sizes))
+            if self.plausible:
+                return self.draw(st.integers(0, 3))
             return self.draw(_int_strategy(t))
         raise TypeError(f"message_fuzz: no strategy for field {name!r} of type {t!r}")
 
     def _string(self, name: str, slot: Any) -> str:
         v = self.vocab
+        unknown = [] if self.plausible else list(v.unknown)
         if name == "frame_id":
-            pool = list(v.frames) + list(v.unknown)
+            pool = list(v.frames) + unknown
         elif name in _NAME_FIELDS:
-            pool = list(v.joint_names) + list(v.unknown)
+            pool = list(v.joint_names) + unknown
         elif name == "encoding":
-            pool = ["rgb8", "bgr8", "mono8", "32FC1", "16UC1", "no_such_encoding", ""]
+            pool = ["rgb8", "bgr8", "mono8", "32FC1", "16UC1"] + (
+                [] if self.plausible else ["no_such_encoding", ""])
         else:
-            pool = list(v.words) + list(v.unknown)
+            pool = list(v.words) + unknown
         s = self.draw(st.sampled_from(pool or [""]))
         bound = getattr(slot, "maximum_size", None)
         return s[:bound] if isinstance(bound, int) else s
