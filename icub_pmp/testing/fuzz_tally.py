@@ -14,7 +14,8 @@ class InterfaceTally:
     ``cases``: inputs sent; ``crashes``: cases after which the serving node's process was gone;
     ``hangs``: requests or goals not answered within the interface's time budget; ``unclear``:
     rejections (success false, an error code) with an empty message; ``rejected``: clear
-    rejections; ``burst_hz``: the rate a topic burst reached [msg/s]; ``examples``: a few of the problems, for the failure message.
+    rejections; ``burst_hz``: the rate a topic burst reached [msg/s]; ``examples``: a few of
+    the problems, for the failure message.
     """
 
     kind: str

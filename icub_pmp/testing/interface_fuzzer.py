@@ -213,9 +213,9 @@ class InterfaceFuzzer:
     def disorder_topic(self, topic: str, template: Any, nodes: Sequence[str], n: int = 20,
                        rate_hz: float = 1000.0, burst_s: float = 0.5) -> InterfaceTally:
         """Topic-level cases with a valid ``template`` message: ``n`` copies with out-of-order
-        and repeated stamps from the template's on, then a burst at ten times ``rate_hz`` for ``burst_s`` s (as
-        fast as this process publishes, if slower), then ``n`` corrupt serialized messages
-        (truncated CDR, garbage bytes). The subscribers must still run."""
+        and repeated stamps from the template's on, then a burst at ten times ``rate_hz``
+        for ``burst_s`` s (as fast as this process publishes, if slower), then ``n`` corrupt
+        serialized messages (truncated CDR, garbage bytes). The subscribers must still run."""
         from rclpy.serialization import serialize_message
 
         t = self.tally.get(f"{topic} (order/rate/cdr)", "topic", ",".join(nodes))
