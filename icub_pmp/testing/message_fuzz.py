@@ -29,7 +29,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import math
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 from hypothesis import strategies as st
 
@@ -63,13 +63,16 @@ class FuzzVocabulary:
     """Known strings the fuzzer mixes with unknown ones.
 
     ``joint_names``: the robot's joint names; ``frames``: frames the graph knows; ``words``:
-    other valid string values (hands, chains, postures, objects, modes); ``unknown``: values no
-    node should accept; ``max_sequence``: longest free-length sequence drawn.
+    other valid string values (hands, chains, postures, objects, modes); ``fields``: the valid
+    values of particular string fields by field name (``hands``, ``chain``, ...), used by
+    plausible messages; ``unknown``: values no node should accept; ``max_sequence``: longest
+    free-length sequence drawn.
     """
 
     joint_names: tuple[str, ...] = ()
     frames: tuple[str, ...] = ("root_link",)
     words: tuple[str, ...] = ()
+    fields: Mapping[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
     unknown: tuple[str, ...] = ("", "no_such_thing", "ROOT_LINK", " left", "\u00e9\u00e8",
                                 "x" * 300)
     max_sequence: int = 6
@@ -85,8 +88,11 @@ class FuzzVocabulary:
         frames = ("root_link", *spec.hand_frames.values(), *spec.arm_ft_frames.values())
         words = ("left", "right", "both", "head", *CHAIN_NAMES, *spec.postures,
                  "box", "cylinder", *spec.hand_frames, *extra_words)
+        fields = {"hands": ("left", "right"), "chain": tuple(CHAIN_NAMES),
+                  "posture": tuple(spec.postures), "name": ("box", "cylinder"),
+                  "target": ("r_hand", "l_hand", "box")}
         return cls(joint_names=tuple(spec.actuated_joints), frames=frames,
-                   words=tuple(dict.fromkeys(words)))
+                   words=tuple(dict.fromkeys(words)), fields=fields)
 
 
 def message_class(type_: Any) -> type:
@@ -175,6 +181,10 @@ class _Draw:
                 names = self.draw(_names_strategy(self.vocab, self.plausible))
                 self.n_names = len(names)
                 return names[:bound] if bound else names
+            if self.plausible and name in self.vocab.fields:
+                known = list(self.vocab.fields[name])
+                return self.draw(st.lists(st.sampled_from(known), min_size=1,
+                                          max_size=len(known), unique=True))
             n = self.draw(st.integers(0, self.vocab.max_sequence))
             out = [self.scalar(name, vt) for _ in range(n)]
             if out and self.draw(st.booleans()):
@@ -236,7 +246,9 @@ class _Draw:
     def _string(self, name: str, slot: Any) -> str:
         v = self.vocab
         unknown = [] if self.plausible else list(v.unknown)
-        if name == "frame_id":
+        if self.plausible and name in v.fields:
+            pool = list(v.fields[name])
+        elif name == "frame_id":
             pool = list(v.frames) + unknown
         elif name in _NAME_FIELDS:
             pool = list(v.joint_names) + unknown
