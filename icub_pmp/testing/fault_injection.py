@@ -12,7 +12,8 @@ One :meth:`FaultInjector.run` = one row of the fault table:
 4. the node is restarted; ``rejoin_s`` is the wall time until it serves again (its key
    interface is back, :data:`READY`), and a service client created *before* the restart calls
    ``/pmp/reach`` with a bounded wait (it must wait or answer, never hang);
-5. the next reach goal must succeed on the measured robot: then the fault is recovered.
+5. the next reach goal must succeed on the measured robot: then (with the others alive and
+   the early call answered) the fault is recovered.
 """
 
 from __future__ import annotations
@@ -131,7 +132,8 @@ class FaultInjector:
     through ``probe`` (module doc)."""
 
     def __init__(self, probe: RosProbe, graph: NodeGraph, observe_s: float = 3.0,
-                 goal_timeout: float = 120.0, ready_timeout: float = 180.0):
+                 goal_timeout: float = 120.0, ready_timeout: float = 180.0,
+                 answer_timeout: float = 15.0):
         from icub_interfaces.action import Reach
 
         self.probe = probe
@@ -139,6 +141,7 @@ class FaultInjector:
         self.observe_s = observe_s
         self.goal_timeout = goal_timeout
         self.ready_timeout = ready_timeout
+        self.answer_timeout = answer_timeout
         self.status = _StatusLog(probe)
         self.client = probe.action_client("/pmp/reach_action", Reach, timeout=ready_timeout)
         self._k = 0
@@ -159,8 +162,11 @@ class FaultInjector:
         if node == "impedance_controller":
             return self._fresh("/effort_command", JointState)
         if node == "pmp_planner":
-            return self.client.server_is_ready()
-        raise ValueError(f"no readiness check for node {node!r}")
+            # after a SIGKILL the dead server stays "ready" until its DDS lease expires: the
+            # restarted process must also have said that it serves
+            return (self.client.server_is_ready()
+                    and "serving /pmp/reach" in self.graph.procs[node].output())
+        return f"/{node}" in self.probe.node_names()  # any other node: on the graph
 
     def wait_ready(self, timeout: float | None = None) -> bool:
         """Wait until every node of the graph serves."""
@@ -208,14 +214,20 @@ class FaultInjector:
         out.interrupted_goal += self._interrupted(sent, node)
         t0 = time.monotonic()
         self.graph.start(node)
+        rejoined: list[float] = []
+        poll = threading.Thread(target=lambda: self.probe.wait_for(
+            lambda: self.ready(node) and not rejoined.append(time.monotonic() - t0),
+            self.ready_timeout), daemon=True)
+        poll.start()
         out.early_call = self._early_call(early)
-        if self.probe.wait_for(lambda: self.ready(node), self.ready_timeout):
-            out.rejoin_s = time.monotonic() - t0
+        poll.join(self.ready_timeout + 10.0)
+        if rejoined:
+            out.rejoin_s = rejoined[0]
         ok, text = self.reach()
         if not ok:  # a goal sent while the graph was still settling: one more try
             ok, text = self.reach()
         out.next_goal = text
-        out.recovered = ok and out.others_alive
+        out.recovered = ok and out.others_alive and not out.early_call.startswith("HANG")
         self.probe.destroy(early)
         return out
 
@@ -231,15 +243,25 @@ class FaultInjector:
         return f"{r.outcome}: {r.message}"
 
     def _early_call(self, client: Any) -> str:
-        """A client made before the restart calls /pmp/reach at once, with a bounded wait."""
+        """A client made before the restart calls /pmp/reach at once, as ``icub call`` does:
+        a bounded wait for the service, a bounded wait for the answer (a clear error), and
+        the user's retry. After a SIGKILL the dead server stays "available" until its DDS
+        lease expires, so the first request can go to it and be lost: that must end in the
+        clear error, and the retry must reach the restarted server."""
         from icub_pmp.testing.graph_interfaces import good_reach
 
         t0 = time.monotonic()
-        if not client.wait_for_service(timeout_sec=self.ready_timeout):
-            return f"no server after {self.ready_timeout:g} s (clear)"
-        fut = client.call_async(good_reach())
-        if not self.probe.wait_for(fut.done, 60.0):
-            client.remove_pending_request(fut)
-            return "HANG (no answer in 60 s)"
-        r = fut.result()
-        return f"{'ok' if r.success else 'rejected'} after {time.monotonic() - t0:.1f} s"
+        lost = 0
+        while time.monotonic() - t0 < self.ready_timeout:
+            if not client.wait_for_service(timeout_sec=self.ready_timeout):
+                return f"no server after {self.ready_timeout:g} s (clear error)"
+            fut = client.call_async(good_reach())
+            if self.probe.wait_for(fut.done, self.answer_timeout):
+                r = fut.result()
+                return (f"{'ok' if r.success else 'rejected'} after "
+                        f"{time.monotonic() - t0:.1f} s"
+                        + (f", {lost} request(s) lost to the dead server, retried" if lost
+                           else ""))
+            client.remove_pending_request(fut)  # the clear error: no answer in time
+            lost += 1
+        return f"HANG (no answer in {self.ready_timeout:g} s, {lost} tries)"
