@@ -95,12 +95,13 @@ class CartesianController:
 
     def trajectory_time(self, requested: float) -> float:
         """The duration T [s] of a goal: ``requested`` or the default when 0; at least 10
-        generator periods (raises :class:`InvalidInput`)."""
+        generator periods, at most ``max_trajectory_time`` (raises :class:`InvalidInput`)."""
         T = float(requested) or self.config.trajectory_time
-        if not (math.isfinite(T) and T >= 10 * self.config.period):
+        T_max = self.config.max_trajectory_time
+        if not (math.isfinite(T) and 10 * self.config.period <= T <= T_max):
             raise InvalidInput(
-                f"trajectory_time: expected 0 (default) or >= {10 * self.config.period} s, "
-                f"got {requested}")
+                f"trajectory_time: expected 0 (default) or {10 * self.config.period:g} to "
+                f"{T_max:g} s (max_trajectory_time), got {requested}")
         return T
 
     def go_to(

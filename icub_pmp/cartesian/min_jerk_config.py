@@ -25,6 +25,8 @@ class MinJerkConfig(ConfigBase):
             False = joint-space min-jerk only.
         settle_tolerance: the rollout ends when every joint is this close to q_d [rad].
         max_duration_factor: the rollout never exceeds this many T [-].
+        max_trajectory_time: the longest T a goal may ask for [s] (as PmpConfig.max_tau: a
+            goal asking 1e9 s rolled out 1e11 samples inside the service call).
     """
 
     trajectory_time: float = 2.0
@@ -34,6 +36,7 @@ class MinJerkConfig(ConfigBase):
     task_space: bool = True
     settle_tolerance: float = 1e-4
     max_duration_factor: float = 4.0
+    max_trajectory_time: float = 60.0
 
     def validate(self) -> None:
         """Check ranges (raise :class:`ConfigError` naming the field)."""
@@ -50,3 +53,8 @@ class MinJerkConfig(ConfigBase):
             )
         if self.max_duration_factor < 1.0:
             raise ConfigError("MinJerkConfig.max_duration_factor must be >= 1")
+        if not (math.isfinite(self.max_trajectory_time)
+                and self.max_trajectory_time >= self.trajectory_time):
+            raise ConfigError(
+                f"MinJerkConfig.max_trajectory_time must be finite and >= trajectory_time = "
+                f"{self.trajectory_time} s, got {self.max_trajectory_time!r}")

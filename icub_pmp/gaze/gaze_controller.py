@@ -187,10 +187,11 @@ class GazeController:
         """
         c = self.config
         T_neck = c.neck_traj_time if neck_traj_time is None else float(neck_traj_time)
-        if not (math.isfinite(T_neck) and T_neck > c.eyes_traj_time):
+        if not (math.isfinite(T_neck) and c.eyes_traj_time < T_neck <= c.max_neck_traj_time):
             raise InvalidInput(
                 f"neck_traj_time: expected a time longer than eyes_traj_time = "
-                f"{c.eyes_traj_time} s, got {neck_traj_time}")
+                f"{c.eyes_traj_time} s and at most max_neck_traj_time = "
+                f"{c.max_neck_traj_time} s, got {neck_traj_time}")
         for _ in range(6):
             plan = self._rollout(target, joints, start, previous, T_neck)
             if len(plan.t) < 2:

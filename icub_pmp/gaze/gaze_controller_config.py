@@ -38,6 +38,8 @@ class GazeControllerConfig(ConfigBase):
         settle_tolerance: a trajectory ends when neck and eyes are this close to their
             targets [rad].
         max_duration_factor: and never lasts longer than this many ``neck_traj_time`` [-].
+        max_neck_traj_time: the longest neck time a request may ask for [s] (a look_at
+            asking 1e9 s rolled out 3e11 samples inside the service call).
     """
 
     neck_traj_time: float = 0.75
@@ -51,6 +53,7 @@ class GazeControllerConfig(ConfigBase):
     joint_limit_margin: float = 0.01
     settle_tolerance: float = 1.0e-4
     max_duration_factor: float = 3.0
+    max_neck_traj_time: float = 60.0
 
     def validate(self) -> None:
         """Check ranges (raise :class:`ConfigError` naming the field)."""
@@ -84,3 +87,8 @@ class GazeControllerConfig(ConfigBase):
             raise ConfigError(
                 f"GazeControllerConfig.max_duration_factor must be >= 1.5 (the min-jerk "
                 f"transient lasts 1.5 T), got {self.max_duration_factor!r}")
+        if not (math.isfinite(self.max_neck_traj_time)
+                and self.max_neck_traj_time >= self.neck_traj_time):
+            raise ConfigError(
+                f"GazeControllerConfig.max_neck_traj_time must be finite and >= "
+                f"neck_traj_time = {self.neck_traj_time} s, got {self.max_neck_traj_time!r}")
