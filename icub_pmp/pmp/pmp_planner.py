@@ -21,6 +21,7 @@ Steps of :meth:`PmpPlanner.plan`:
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Mapping
 
@@ -128,7 +129,8 @@ class PmpPlanner:
                 raise UnknownName("hand", h, HANDS)
         if goal.tau is not None and goal.tau > c.max_tau:
             raise InvalidInput(f"tau: {goal.tau} s exceeds the planner's max_tau {c.max_tau} s")
-        for j in tuple(goal.frozen_joints) + tuple(goal.joint_limits):
+        for j in (tuple(goal.frozen_joints) + tuple(goal.joint_limits)
+                  + tuple(goal.torque_limits) + tuple(goal.admittance_scales)):
             if j not in self._names:
                 raise UnknownName("joint", j, self._names)
         branches = self._branches(goal)
@@ -166,7 +168,8 @@ class PmpPlanner:
 
     def _branches(self, goal: ReachGoal) -> BranchNetwork:
         """The branching network of the goal's hands, trunk and admittance modulation."""
-        key = (goal.hands, goal.use_torso, goal.trunk_admittance_scale, goal.frozen_joints)
+        key = (goal.hands, goal.use_torso, goal.trunk_admittance_scale, goal.frozen_joints,
+               tuple(sorted(goal.admittance_scales.items())))
         branches = self._branch_cache.get(key)
         if branches is not None:
             return branches
@@ -180,9 +183,10 @@ class PmpPlanner:
             arm_a = {h: a * self._range_factor(arms[h]) for h, a in arm_a.items()}
         branches = BranchNetwork(trunk, arms, trunk_a, arm_a)
         frozen = set(goal.frozen_joints)
-        if frozen:
+        if frozen or goal.admittance_scales:
             a = branches.admittance.copy()
             for i, j in enumerate(branches.joint_names):
+                a[i] *= goal.admittance_scales.get(j, 1.0)
                 if j in frozen:
                     a[i] = 0.0
             branches = branches.with_admittance(
@@ -222,7 +226,7 @@ class PmpPlanner:
                     break
         null_space = np.zeros(trace.steps, dtype=bool)
         torque_field = None
-        if goal.target_forces:
+        if goal.target_forces or goal.torque_limits:
             trace, null_space, torque_field = self._settle_torques(goal, net, trace)
         return self._make_plan(goal, net, trace, null_space, torque_field, attempts,
                                used_memory, t0)
@@ -275,10 +279,12 @@ class PmpPlanner:
         """Sect. 2.3: from the equilibrium, relax with the saturation field (null space)."""
         c = self.config
         hands = tuple(h for h in net.hands if h in goal.target_forces)
-        limits = np.array([self.spec.torque_limit(j) for j in self._names])
+        limits = np.array([goal.torque_limits.get(j) or self.spec.torque_limit(j)
+                           for j in self._names])
         field = TorqueLimitField(
             self.provider, [self.spec.hand_frame(h) for h in hands],
-            np.array([goal.target_forces[h] for h in hands]), limits, net.joint_index,
+            np.array([goal.target_forces[h] for h in hands]).reshape(len(hands), 3), limits,
+            net.joint_index,
             gravity=c.torque_gravity, margin=c.torque_limit_margin,
         )
         net2 = PmpNetwork(
@@ -347,11 +353,24 @@ class PmpPlanner:
         ok = all(r <= c.success_tolerance for r in residuals.values()) and all(
             r <= c.rotation_success_tolerance for r in rot_res.values()
         )
-        torque_ratio = None
+        torque_ratio, final_torques, torque_limits = None, None, None
         if torque_field is not None:
             torque_ratio = torque_field.violation(q_final)
             ok = ok and torque_ratio <= 1.0
-        message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory)
+            final_torques = torque_field.required_torques(q_final)[net.joint_index]
+            torque_limits = torque_field.limits[net.joint_index].copy()
+        hand_paths = functools.lru_cache(maxsize=1)(
+            lambda: self._hand_paths(net.hands, net.frames, q_full))
+        clearance, kept = None, True
+        if net.obstacles:  # judged on the sampled plan, not only the relaxation's nodes
+            pts = np.concatenate(list(hand_paths().values()))
+            clearance = min(float(np.min(ob.surface_distance(pts))) for ob in net.obstacles)
+            kept = min(float(np.min(ob.clearance(pts))) for ob in net.obstacles) >= 0.0
+            ok = ok and kept
+        message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory,
+                                not kept)
+        if clearance is not None:
+            message += f"; obstacle clearance {clearance * 1e3:.1f} mm"
         plan = ReachPlan(
             hands=net.hands,
             joint_names=net.branches.joint_names,
@@ -370,7 +389,10 @@ class PmpPlanner:
             torque_ratio=torque_ratio,
             attempts=attempts,
             used_memory=used_memory,
-            path_function=lambda: self._hand_paths(net.hands, net.frames, q_full),
+            path_function=hand_paths,
+            obstacle_clearance=clearance,
+            final_torques=final_torques,
+            torque_limits=torque_limits,
         )
         return plan
 
@@ -378,7 +400,8 @@ class PmpPlanner:
         paths = np.array([self.provider.positions(q, frames) for q in q_full])
         return {h: paths[:, i, :].copy() for i, h in enumerate(hands)}
 
-    def _message(self, hands, residuals, rot_res, ok, torque_ratio, used_memory) -> str:
+    def _message(self, hands, residuals, rot_res, ok, torque_ratio, used_memory,
+                 blocked=False) -> str:
         c = self.config
         parts = [f"{h} {residuals[h] * 1e3:.2f} mm" for h in hands]
         text = "residuals " + ", ".join(parts)
@@ -392,6 +415,9 @@ class PmpPlanner:
                 worst = max(short, key=lambda h: residuals[h])
                 head = (f"out of reach: {worst} hand ends {residuals[worst] * 1e3:.1f} mm from "
                         f"its target (a tool that long would be needed)")
+            elif blocked:
+                head = ("blocked: no path found that keeps the asked clearance from the "
+                        "obstacles")
             elif torque_ratio is not None and torque_ratio > 1.0:
                 head = f"torque limits exceeded by a factor {torque_ratio:.2f} after settling"
             else:
