@@ -16,7 +16,7 @@ from icub_interfaces.action import Reach as ReachAction
 from icub_interfaces.msg import Obstacle, Obstacles
 from icub_interfaces.srv import Reach
 from icub_pmp.ros.conversions import make_joint_state
-from icub_pmp.testing import NodeProcess, repo_root
+from icub_pmp.testing import NodeProcess, repo_root, run_icub
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 TARGET = (-0.28, 0.10, 0.20)  # right hand target [m], root_link, ~0.2 m from the rest hand
@@ -224,3 +224,67 @@ def test_obstacle_topic_is_merged_and_bad_fields_are_answered(node, ros_probe):
     ros_probe.destroy(client, pub)
     assert node.alive()
     assert ros_probe.call("/pmp/reach", Reach, request()).success
+
+
+def _value(out: str, label: str) -> str:
+    """The text after ``label`` on its line of the CLI's output."""
+    line = next(x for x in out.splitlines() if x.startswith(label))
+    return line[len(label):].strip()
+
+
+def test_cli_flags_reach_the_planner(node, ros_probe, model):
+    """``icub reach`` with --hold, --obstacle/--clearance, --force/--torque-limit, --trunk,
+    --freeze and --scale (--simulate: the /pmp/reach service) prints the planner's answer: the
+    object path ends at the held object's goal, the clearance kept, the torques within the
+    tight limit; the planner's rejection (an obstacle on the target) exits 1 with its message."""
+    assert ros_probe.wait_for_service("/pmp/reach", Reach, 90.0), node.output()
+    rest = model.posture("rest")
+    mid = 0.5 * sum(model.frame_position(rest, f"{h}_hand_dh_frame") for h in "lr")
+    goal = mid + np.array([0.05, 0.0, 0.10])
+    out = run_icub("reach", "--hold=" + ",".join(f"{v:.4f}" for v in goal), "--torso",
+                   "--simulate")
+    assert out.returncode == 0, out.stdout + out.stderr
+    end = _value(out.stdout, "object path:").split("ends at (")[1].split(")")[0]
+    assert np.linalg.norm(np.array([float(v) for v in end.split(",")]) - goal) < 0.002
+
+    out = run_icub("reach", "right=-0.28,0.10,0.20", "--obstacle",
+                   "sphere:-0.29,0.15,0.11,0.03", "--obstacle", "box:0.2,0.0,0.0,0.1,0.1,0.1",
+                   "--clearance", "0.02", "--simulate")
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert float(_value(out.stdout, "obstacle clearance:").split()[0]) >= 20.0
+
+    out = run_icub("reach", "right=-0.28,0.10,0.20", "--force", "0,0,-10", "--torque-limit",
+                   "r_elbow=0.25", "--simulate")
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert _value(out.stdout, "torques within limits:") == "True"
+    torques = _value(out.stdout, "torques at the final posture [N m]:")
+    elbow = float(torques.split("r_elbow ")[1].split(",")[0])
+    assert abs(elbow) <= 0.25
+
+    out = run_icub("reach", "right=-0.20,0.05,0.30", "--trunk", "stiff", "--freeze",
+                   "r_wrist_prosup", "--scale", "r_shoulder_yaw=2", "--simulate")
+    assert out.returncode == 0 and "success: True" in out.stdout, out.stdout + out.stderr
+
+    out = run_icub("reach", "right=-0.28,0.10,0.20", "--obstacle",
+                   "sphere:-0.28,0.10,0.20,0.05", "--simulate")
+    assert out.returncode == 1 and "encloses the right hand's target" in out.stdout, \
+        out.stdout + out.stderr
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["right=-0.3,0.1,0.1", "--obstacle", "sphere:0,0,0,-0.1"], "sizes must be > 0"),
+    (["right=-0.3,0.1,0.1", "--obstacle", "cone:0,0,0"], "--obstacle 'cone:0,0,0'"),
+    (["right=-0.3,0.1,0.1", "--force", "0,0"], "--force"),
+    (["right=-0.3,0.1,0.1", "--force", "left=0,0,-10"], "the left hand has no target"),
+    (["right=-0.3,0.1,0.1", "--torque-limit", "r_elbow=-1"], "--torque-limit"),
+    (["right=-0.3,0.1,0.1", "--trunk", "floppy"], "--trunk"),
+    (["right=-0.3,0.1,0.1", "--freeze", "r_elbo"], "--freeze"),
+    (["right=-0.3,0.1,0.1", "--hold", "0,0,0"], "--hold"),
+    (["--hold", "0,0,nan"], "NaN"),
+])
+def test_cli_bad_flags_exit_with_one_line(args, expected):
+    """Bad PMP flags: exit 2 or 1 with a one-line error before anything is sent."""
+    out = run_icub("reach", *args, "--simulate", "--timeout", "1")
+    assert out.returncode != 0
+    err = out.stderr.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("icub: error:") and expected in err[0], out.stderr
