@@ -62,6 +62,26 @@ class ObstacleField:
         self.influence = check_positive("influence", influence)
         self.gain = check_positive("gain", gain)
         self.inflation = check_positive("inflation", inflation, allow_zero=True)
+        self.rho_min = min(type(self).rho_min, 0.1 * self.influence)
+
+    def clear_of(self, points) -> "ObstacleField":
+        """This field with its influence shrunk so that ``points`` (k, 3) [m] (the targets)
+        lie outside it (at most 0.9 of their clearance): the field then does not move an
+        equilibrium at a target. Raises InvalidInput when a point is inside the grown surface."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 3)
+        if not len(pts):
+            return self
+        rho = float(np.min(self.clearance(pts)))
+        if rho <= 0:
+            raise InvalidInput(f"obstacle {self.kind}: a target is {rho * 1e3:.1f} mm inside its "
+                               f"surface grown by the clearance ({self.inflation * 1e3:.1f} mm)")
+        if 0.9 * rho >= self.influence:
+            return self
+        field = object.__new__(type(self))
+        field.__dict__.update(self.__dict__)
+        field.influence = 0.9 * rho
+        field.rho_min = min(type(self).rho_min, 0.1 * field.influence)
+        return field
 
     def _surface(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(signed distance to the real surface (...,) [m], < 0 inside; outward unit normal

@@ -82,16 +82,20 @@ class PmpPlanner:
         c = self.config
         self._field = ForceField(np.zeros(3), np.array(c.stiffness), c.curl, c.curl_axis)
         self._relax = Relaxation(self._settings(self.config.max_steps))
+        self._relax_obstacles = Relaxation(self._settings(
+            self.config.max_steps, max_displacement=self.config.obstacle_step or None))
         self._settle = Relaxation(self._settings(
             self.config.settle_max_steps, normalise=False, max_step=self.config.settle_max_step))
 
     def _settings(self, max_steps: int, normalise: bool = True,
-                  max_step: float | None = None) -> RelaxationSettings:
+                  max_step: float | None = None, max_displacement: float | None = None
+                  ) -> RelaxationSettings:
         c = self.config
         return RelaxationSettings(
             initial_step=c.initial_step, step_growth=c.step_growth,
             max_step=c.max_step if max_step is None else max_step,
-            max_displacement=c.max_displacement,
+            max_displacement=c.max_displacement if max_displacement is None
+            else max_displacement,
             max_steps=max_steps, stall_steps=c.stall_steps, tolerance=c.convergence_tolerance,
             rotation_tolerance=c.rotation_tolerance, boundary_fraction=c.boundary_fraction,
             normalise_rate=normalise, balance_hands=normalise and c.balance_hands,
@@ -161,9 +165,14 @@ class PmpPlanner:
         orientations = {
             h: OrientationField(r, c.rotation_stiffness) for h, r in goal.orientations.items()
         }
+        finals = [t.target for t in targets.values()]
+        if goal.held_object is not None:
+            finals += list(goal.held_object.hand_targets().values())
+        # obstacle fields do not reach the targets (the equilibrium stays on them)
+        obstacles = [ob.clear_of(finals) for ob in goal.obstacles]
         return PmpNetwork(
             self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
-            targets, orientations, goal.obstacles, limits, goal.held_object, posture,
+            targets, orientations, obstacles, limits, goal.held_object, posture,
         )
 
     def _branches(self, goal: ReachGoal) -> BranchNetwork:
@@ -210,7 +219,8 @@ class PmpPlanner:
         c = self.config
         q0 = self.start_configuration(q_start)
         net = self.build_network(goal, q0)
-        trace = self._relax.run(net)
+        relax = self._relax_obstacles if goal.obstacles else self._relax
+        trace = relax.run(net)
         attempts, used_memory = 1, False
         if not self._reached(trace) and c.posture_memory_size > 0:
             recalls = self._memory(net).recall(
@@ -218,7 +228,7 @@ class PmpPlanner:
             )
             for recall in recalls:
                 field = PostureField(recall.q, c.posture_field_gain, c.posture_field_decay)
-                trace2 = self._relax.run(self.build_network(goal, q0, posture=field))
+                trace2 = relax.run(self.build_network(goal, q0, posture=field))
                 attempts += 1
                 if self._score(trace2) < self._score(trace):
                     trace, used_memory = trace2, True

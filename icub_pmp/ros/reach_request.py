@@ -360,22 +360,22 @@ def _trunk_scale(req, config: ReachRequestConfig) -> float:
 
 def _check_free(obstacles: Sequence[ObstacleField], targets: Mapping[str, np.ndarray],
                 starts: Mapping[str, np.ndarray], clearance: float, n_request: int) -> None:
-    """Reject targets and start hands within ``clearance`` of an obstacle."""
+    """Reject targets and start hands closer to an obstacle than its field's grown surface
+    (the clearance + the planning margin)."""
     for i, ob in enumerate(obstacles):
         name = f"obstacles[{i}]" if i < n_request else f"/pmp/obstacles[{i - n_request}]"
+        keep = (f"the hands keep {clearance * 1e3:.1f} mm + a "
+                f"{(ob.inflation - clearance) * 1e3:.1f} mm planning margin")
         for h, p in targets.items():
             d = float(ob.surface_distance(p))
-            if d < clearance:
+            if d < ob.inflation:
                 what = "encloses" if d < 0 else "comes within the clearance of"
-                raise InvalidInput(
-                    f"{name}: the {ob.kind} {what} the {h} hand's target (its surface is "
-                    f"{d * 1e3:.1f} mm from it, the clearance is {clearance * 1e3:.1f} mm)")
+                raise InvalidInput(f"{name}: the {ob.kind} {what} the {h} hand's target (its "
+                                   f"surface is {d * 1e3:.1f} mm from it; {keep})")
         for h, p in starts.items():
             if h not in targets:
                 continue
             d = float(ob.surface_distance(p))
-            if d < clearance:
-                raise InvalidInput(
-                    f"{name}: the {h} hand starts {d * 1e3:.1f} mm from this {ob.kind}, within "
-                    f"the clearance {clearance * 1e3:.1f} mm; move it away first")
-
+            if d < ob.inflation:
+                raise InvalidInput(f"{name}: the {h} hand starts {d * 1e3:.1f} mm from this "
+                                   f"{ob.kind} ({keep}); move it away first")
