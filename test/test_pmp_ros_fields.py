@@ -15,6 +15,7 @@ from sensor_msgs.msg import JointState
 from icub_interfaces.action import Reach as ReachAction
 from icub_interfaces.msg import Obstacle, Obstacles
 from icub_interfaces.srv import Reach
+from icub_pmp.kinematics.rotations import matrix_to_quat_wxyz
 from icub_pmp.ros.conversions import make_joint_state
 from icub_pmp.testing import NodeProcess, repo_root, run_icub
 
@@ -128,6 +129,20 @@ def test_obstacle_between_hand_and_target_is_avoided_with_the_clearance(node, ro
     assert kept >= clearance - 1e-3, kept
     assert resp.obstacle_clearance >= clearance and "obstacle clearance" in resp.message
     assert np.linalg.norm(path[-1] - TARGET) < 1e-3
+
+    # a wall (a thin box 60 x 60 cm) across the way: no path, said so, not executed
+    start = hand_path(model, free, "right")[0]
+    z = (np.array(TARGET) - start) / np.linalg.norm(np.array(TARGET) - start)
+    x = np.cross([1.0, 0.0, 0.0], z)
+    x /= np.linalg.norm(x)
+    wall = Obstacle(type="box")
+    set_xyz(wall.pose.position, 0.5 * (start + np.array(TARGET)))
+    o = wall.pose.orientation
+    o.w, o.x, o.y, o.z = matrix_to_quat_wxyz(np.column_stack([x, np.cross(z, x), z]))
+    set_xyz(wall.size, (0.6, 0.6, 0.02))
+    resp = call(ros_probe, node, request(obstacles=[wall], simulate_only=False))
+    assert not resp.success and "blocked by the obstacles" in resp.message, resp.message
+    assert "not executed" in resp.message
 
 
 def test_tight_torque_limit_with_force_target_is_respected(node, ros_probe):

@@ -378,7 +378,7 @@ class PmpPlanner:
             kept = min(float(np.min(ob.clearance(pts))) for ob in net.obstacles) >= 0.0
             ok = ok and kept
         message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory,
-                                not kept)
+                                not kept, bool(net.obstacles))
         if clearance is not None:
             message += f"; obstacle clearance {clearance * 1e3:.1f} mm"
         plan = ReachPlan(
@@ -411,7 +411,7 @@ class PmpPlanner:
         return {h: paths[:, i, :].copy() for i, h in enumerate(hands)}
 
     def _message(self, hands, residuals, rot_res, ok, torque_ratio, used_memory,
-                 blocked=False) -> str:
+                 blocked=False, obstacles=False) -> str:
         c = self.config
         parts = [f"{h} {residuals[h] * 1e3:.2f} mm" for h in hands]
         text = "residuals " + ", ".join(parts)
@@ -423,8 +423,10 @@ class PmpPlanner:
             short = [h for h in hands if residuals[h] > c.success_tolerance]
             if short:
                 worst = max(short, key=lambda h: residuals[h])
-                head = (f"out of reach: {worst} hand ends {residuals[worst] * 1e3:.1f} mm from "
-                        f"its target (a tool that long would be needed)")
+                head = f"{worst} hand ends {residuals[worst] * 1e3:.1f} mm from its target"
+                head = (f"out of reach or blocked by the obstacles (no path found that keeps "
+                        f"the clearance): {head}" if obstacles else
+                        f"out of reach: {head} (a tool that long would be needed)")
             elif blocked:
                 head = ("blocked: no path found that keeps the asked clearance from the "
                         "obstacles")
