@@ -15,6 +15,23 @@ TBG sampling of the trajectory, residuals); the posture memory is built once bef
 (reported as memory_build_s) and the predicted hand paths (computed on demand, for the node's
 nav_msgs/Path) are timed separately. The same targets go to DLS (icub_pmp.baselines.DlsSolver, same
 joints, limits and start). Ends with one JSON line. Timings depend on the machine's load.
+
+The request fields of /pmp/reach (built as pmp_planner builds them, config/pmp_planner.yaml's
+defaults of icub_pmp.ros.reach_request.ReachRequestConfig), on scenes of their own seeds, each
+judged by an independent forward kinematics of the sampled plan (50 scenes each, 10 --quick):
+
+- transport (Sect. 3.2, Fig 8): the object held between the hands at rest goes to a random goal
+  (within +-8 cm in x, y and 0..15 cm up); ``transport_hand_dist_err_mm_max`` = the largest
+  change of the hand-to-hand distance along any plan; baseline in the same scenes: both hands
+  sent to independent targets moved by the same offset (the demo's former transport);
+- obstacles: a random right-hand target (a random right-arm posture), a sphere (radius 2-4 cm)
+  centred on the free plan's mid-path point, clearance 2 cm: ``obstacle_success_rate`` (target
+  reached and the clearance kept) and ``obstacle_clearance_min_mm`` (smallest hand-to-surface
+  distance over the successful plans);
+- force targets (Sect. 2.3, Fig 3): the same kind of targets with a 10 N force in a random
+  direction; the joint needing the largest fraction of its rating is limited to half the torque
+  the free plan needs there: ``force_target_torque_ok_rate`` = plans reaching the target with
+  every network joint within its limit (baseline: the free plan under the same limit).
 """
 
 from __future__ import annotations
@@ -34,10 +51,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.baselines import PMP_DLS_CONFIG, DlsSolver  # noqa: E402
 from icub_pmp.pmp import (  # noqa: E402
+    HeldObject,
+    ObstacleField,
     PmpPlanner,
     ReachGoal,
     TimeBaseGenerator,
 )
+from icub_pmp.ros.reach_request import ReachRequestConfig  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "out"
 SUCCESS = 1e-3  # [m]
@@ -105,6 +125,132 @@ def run_dls(planner: PmpPlanner, targets: np.ndarray) -> dict:
     return {"times": np.array(times) * 1e3, "cpu": np.array(cpu) * 1e3,
             "residuals": np.array(residuals),
             "iterations": np.array(iters)}
+
+
+# ---------------------------------------------------------------------------- request fields
+def _hands_at(planner: PmpPlanner, q: np.ndarray) -> np.ndarray:
+    spec = planner.spec
+    return planner.provider.positions(q, [spec.hand_frame("left"), spec.hand_frame("right")])
+
+
+def _hand_distance_error(planner: PmpPlanner, plan) -> float:
+    """Largest change of the hand-to-hand distance along the plan [m] (forward kinematics of
+    every sample, other joints at the start)."""
+    names = planner.provider.joint_names
+    idx = [names.index(j) for j in plan.joint_names]
+    d = []
+    for row in plan.positions:
+        q = plan.q_start.copy()
+        q[idx] = row
+        x = _hands_at(planner, q)
+        d.append(np.linalg.norm(x[0] - x[1]))
+    return float(np.max(np.abs(np.array(d) - d[0])))
+
+
+def run_transport(planner: PmpPlanner, n: int, seed: int) -> dict:
+    """Coupled transport (held object) vs independent hand targets, same goals."""
+    cfg = ReachRequestConfig()
+    rng = np.random.default_rng(seed)
+    rest = planner.start_configuration(None)
+    x0 = _hands_at(planner, rest)
+    mid = x0.mean(axis=0)
+    coupled, independent, ok, times = [], [], 0, []
+    for _ in range(n):
+        offset = rng.uniform([-0.08, -0.08, 0.0], [0.08, 0.08, 0.15])
+        held = HeldObject(mid, mid + offset, {"left": x0[0] - mid, "right": x0[1] - mid},
+                          goal_stiffness=cfg.object_goal_stiffness,
+                          grasp_stiffness=cfg.object_grasp_stiffness,
+                          admittance=cfg.object_admittance)
+        t0 = time.perf_counter()
+        plan = planner.plan(ReachGoal(held_object=held, tau=TAU), rest)
+        times.append(time.perf_counter() - t0)
+        ok += plan.success
+        coupled.append(_hand_distance_error(planner, plan))
+        free = planner.plan(ReachGoal(targets={"left": x0[0] + offset, "right": x0[1] + offset},
+                                      tau=TAU), rest)
+        independent.append(_hand_distance_error(planner, free))
+    return {"coupled": np.array(coupled), "independent": np.array(independent),
+            "success": ok / n, "times": np.array(times) * 1e3}
+
+
+def _right_targets(planner: PmpPlanner, rng, min_dist: float) -> np.ndarray:
+    """A reachable right-hand target (a random right-arm posture) at least ``min_dist`` [m]
+    from the rest hand."""
+    prov, spec = planner.provider, planner.spec
+    idx = [prov.joint_names.index(j) for j in spec.right_arm_joints]
+    rest = planner.start_configuration(None)
+    start = _hands_at(planner, rest)[1]
+    while True:
+        q = rest.copy()
+        q[idx] = rng.uniform(prov.lower[idx], prov.upper[idx])
+        x = _hands_at(planner, q)[1]
+        if np.linalg.norm(x - start) >= min_dist:
+            return x
+
+
+def run_obstacles(planner: PmpPlanner, n: int, seed: int, clearance: float = 0.02) -> dict:
+    """A sphere on the free plan's path; plan around it with the clearance."""
+    cfg = ReachRequestConfig()
+    rng = np.random.default_rng(seed)
+    rest = planner.start_configuration(None)
+    start = _hands_at(planner, rest)[1]
+    success, kept, through, times = [], [], 0, []
+    while len(success) < n:
+        target = _right_targets(planner, rng, 0.15)
+        free = planner.plan(ReachGoal(targets={"right": target}, tau=TAU), rest)
+        if not free.success:
+            continue
+        path = free.hand_paths["right"]
+        centre, radius = path[len(path) // 2], float(rng.uniform(0.02, 0.04))
+        if min(np.linalg.norm(start - centre), np.linalg.norm(target - centre)) < \
+                radius + clearance + 0.01:
+            continue  # start or target within the clearance: the request would be rejected
+        through += np.min(np.linalg.norm(path - centre, axis=1)) < radius
+        ob = ObstacleField(centre, radius, cfg.obstacle_influence, cfg.obstacle_gain,
+                           inflation=clearance + cfg.obstacle_margin)
+        t0 = time.perf_counter()
+        plan = planner.plan(ReachGoal(targets={"right": target}, tau=TAU, obstacles=(ob,)),
+                            rest)
+        times.append(time.perf_counter() - t0)
+        final = _hands_at(planner, plan.q_final)[1]
+        d = float(np.min(ob.surface_distance(plan.hand_paths["right"])))
+        reached = np.linalg.norm(final - target) <= SUCCESS
+        success.append(bool(reached and d >= clearance))
+        kept.append(d if reached else np.inf)
+    kept_ok = [k for k, s in zip(kept, success) if s]
+    return {"success": float(np.mean(success)), "through": through / n,
+            "clearance_min": min(kept_ok) if kept_ok else float("nan"),
+            "times": np.array(times) * 1e3}
+
+
+def run_force_targets(planner: PmpPlanner, n: int, seed: int, force: float = 10.0) -> dict:
+    """A force target with the most loaded joint limited to half its free-plan torque."""
+    rng = np.random.default_rng(seed)
+    rest = planner.start_configuration(None)
+    ok, free_ok, times = [], [], []
+    while len(ok) < n:
+        target = _right_targets(planner, rng, 0.05)
+        f = rng.normal(size=3)
+        f *= force / np.linalg.norm(f)
+        goal = ReachGoal(targets={"right": target}, tau=TAU, target_forces={"right": f})
+        free = planner.plan(goal, rest)
+        if not free.success:
+            continue
+        ratio = np.abs(free.final_torques) / free.torque_limits
+        k = int(np.argmax(ratio))
+        joint, limit = free.joint_names[k], 0.5 * abs(float(free.final_torques[k]))
+        free_ok.append(bool(np.all(np.abs(free.final_torques) <= np.where(
+            np.arange(len(ratio)) == k, limit, free.torque_limits))))
+        t0 = time.perf_counter()
+        plan = planner.plan(ReachGoal(targets={"right": target}, tau=TAU,
+                                      target_forces={"right": f},
+                                      torque_limits={joint: limit}), rest)
+        times.append(time.perf_counter() - t0)
+        final = _hands_at(planner, plan.q_final)[1]
+        within = bool(np.all(np.abs(plan.final_torques) <= plan.torque_limits))
+        ok.append(bool(within and np.linalg.norm(final - target) <= SUCCESS))
+    return {"ok": float(np.mean(ok)), "free_ok": float(np.mean(free_ok)),
+            "times": np.array(times) * 1e3}
 
 
 # ---------------------------------------------------------------------------- plots
@@ -211,6 +357,10 @@ def main() -> None:
 
     pmp = run_pmp(planner, targets)
     dls = run_dls(planner, targets)
+    n_scenes = 10 if args.quick else 50
+    transport = run_transport(planner, n_scenes, args.seed + 1)
+    obstacles = run_obstacles(planner, n_scenes, args.seed + 2)
+    forces = run_force_targets(planner, n_scenes, args.seed + 3)
 
     ok = pmp["residuals"] <= SUCCESS
     dok = dls["residuals"] <= SUCCESS
@@ -237,6 +387,20 @@ def main() -> None:
         "dls_residual_mm_median": float(np.median(dls["residuals"]) * 1e3),
         "dls_iterations_median": float(np.median(dls["iterations"])),
         "plan_to_dls_time_ratio": float(np.median(pmp["times"]) / np.median(dls["times"])),
+        "field_scenes": n_scenes,
+        "transport_hand_dist_err_mm_max": float(transport["coupled"].max() * 1e3),
+        "transport_hand_dist_err_mm_median": float(np.median(transport["coupled"]) * 1e3),
+        "transport_success_rate": float(transport["success"]),
+        "transport_independent_hand_dist_err_mm_max": float(
+            transport["independent"].max() * 1e3),
+        "transport_plan_ms_median": float(np.median(transport["times"])),
+        "obstacle_success_rate": obstacles["success"],
+        "obstacle_clearance_min_mm": float(obstacles["clearance_min"] * 1e3),
+        "obstacle_free_plan_through_rate": float(obstacles["through"]),
+        "obstacle_plan_ms_median": float(np.median(obstacles["times"])),
+        "force_target_torque_ok_rate": forces["ok"],
+        "force_target_free_plan_ok_rate": forces["free_ok"],
+        "force_target_plan_ms_median": float(np.median(forces["times"])),
         "load_avg_1min": load,
     }
     print(f"PMP  success {r['success_rate']:.3f}  plan median {r['plan_ms_median']:.2f} ms  "
@@ -246,6 +410,12 @@ def main() -> None:
           f"{r['plan_cpu_ms_median']:.2f} ms, p95 {r['plan_cpu_ms_p95']:.2f} ms)")
     print(f"DLS  success {r['dls_success_rate']:.3f}  median {r['dls_ms_median']:.2f} ms  "
           f"p95 {r['dls_ms_p95']:.2f} ms  iterations median {r['dls_iterations_median']:.0f}")
+    print(f"transport: hand-to-hand distance change max {r['transport_hand_dist_err_mm_max']:.2f}"
+          f" mm (independent targets {r['transport_independent_hand_dist_err_mm_max']:.1f} mm), "
+          f"success {r['transport_success_rate']:.2f}; obstacles: success "
+          f"{r['obstacle_success_rate']:.2f}, clearance min {r['obstacle_clearance_min_mm']:.1f} "
+          f"mm (asked 20); force targets: torques ok {r['force_target_torque_ok_rate']:.2f} "
+          f"(free plan {r['force_target_free_plan_ok_rate']:.2f})")
     failed = np.flatnonzero(~ok)
     if failed.size:
         print("PMP failures (target index: residual mm):",

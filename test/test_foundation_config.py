@@ -20,6 +20,7 @@ from icub_pmp.peripersonal.peripersonal_node_config import PeripersonalNodeConfi
 from icub_pmp.pmp import PmpConfig
 from icub_pmp.ros.cartesian_node_config import CartesianNodeConfig
 from icub_pmp.ros.pmp_node_config import PmpNodeConfig
+from icub_pmp.ros.reach_request import ReachRequestConfig
 from icub_pmp.ros.robot_state_publisher_config import RobotStatePublisherConfig
 from icub_pmp.vision import MotionSegmenterConfig, StereoTargetConfig
 from icub_sim_bridge import SimConfig
@@ -31,7 +32,7 @@ NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
     "impedance_controller": (ImpedanceControllerConfig,),
     "motion_segmenter": (MotionSegmenterConfig, StereoTargetConfig),
     "peripersonal_space": (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig),
-    "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig),
+    "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig, ReachRequestConfig),
     "robot_state_publisher": (RobotStatePublisherConfig,),
     "sim_bridge": (SimConfig,),
     "wrench_estimator": (WrenchEstimatorConfig,),

@@ -35,7 +35,6 @@ ArrivalConfig`).
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -48,18 +47,17 @@ from rclpy.service_introspection import ServiceIntrospectionState
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.action import Reach as ReachAction
+from icub_interfaces.msg import Obstacles
 from icub_interfaces.srv import Reach
 from icub_pmp.control.arrival_monitor import ArrivalConfig
 from icub_pmp.control.joint_trajectory import JointTrajectory as CoreTrajectory
 from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory_time
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
-from icub_pmp.kinematics.rotations import quat_wxyz_to_matrix
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
 from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     joint_state_field,
-    pose_to_arrays,
     positions_to_path,
     validate_joint_state,
 )
@@ -68,8 +66,16 @@ from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 from icub_pmp.ros.node_runner import run_node
 from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.pmp_node_config import PmpNodeConfig
+from icub_pmp.ros.reach_request import (
+    FramePose,
+    ParsedReach,
+    ReachRequestConfig,
+    parse_obstacles,
+    parse_reach_request,
+)
 from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
 from icub_pmp.ros.trajectory_action_server import FIRST_STATE_TIMEOUT
+from icub_pmp.ros.warning_throttle import WarningThrottle
 
 __all__ = ["PmpPlannerNode", "main"]
 
@@ -78,7 +84,8 @@ class PmpPlannerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("pmp_planner")
-        self.params = ConfigParameters(self, (PmpConfig, PmpNodeConfig, ArrivalConfig),
+        self.params = ConfigParameters(self, (PmpConfig, PmpNodeConfig, ArrivalConfig,
+                                              ReachRequestConfig),
                                        on_change=self._on_config_change)
         self.planner = PmpPlanner(self.config)
         self._names = self.planner.provider.joint_names
@@ -97,6 +104,9 @@ class PmpPlannerNode(Node):
             self.get_logger().info(
                 f"posture memory ready ({self.config.posture_memory_size} postures, "
                 f"{time.perf_counter() - t0:.2f} s)")
+        self._scene: list = []  # the latest valid /pmp/obstacles
+        self.warnings = WarningThrottle(self.get_logger(), 5.0)
+        self.create_subscription(Obstacles, "/pmp/obstacles", self._on_obstacles, reliable)
         srv = self.create_service(Reach, "/pmp/reach", self._on_reach)
         # requests and responses on /pmp/reach/_service_event, so bags record reach goals
         srv.configure_introspection(
@@ -167,8 +177,8 @@ class PmpPlannerNode(Node):
         t0 = time.perf_counter()
         try:
             start, assumed, note = self._start_of(req)
-            goal = self._goal_of(req, start)
-            plan = self.planner.plan(goal, start)
+            parsed = self._goal_of(req, start)
+            plan = self.planner.plan(parsed.goal, start)
         except IcubPmpError as exc:
             res.success = False
             res.message = str(exc)
@@ -181,6 +191,7 @@ class PmpPlannerNode(Node):
             return res
         res.hands = list(plan.hands)
         res.residuals = [float(plan.residuals[h]) for h in plan.hands]
+        self._fill_answer(res, plan, parsed)
         res.trajectory, _, slowed = self._limited_trajectory(plan)
         execute = plan.success and not req.simulate_only and not assumed
         listening = ""
@@ -222,39 +233,52 @@ class PmpPlannerNode(Node):
         return (dict(self.planner.spec.posture("rest")), True,
                 " (no /joint_states received: planned from the rest posture)")
 
-    def _goal_of(self, req: Reach.Request, start: dict[str, float]) -> ReachGoal:
-        """Validate the request and build the ReachGoal (targets in root_link)."""
-        hands = list(req.hands)
-        if not hands:
-            raise InvalidInput("hands: empty; give 'left', 'right' or both")
-        if len(set(hands)) != len(hands):
-            raise InvalidInput(f"hands: {hands} names a hand twice")
-        for h in hands:
-            if h not in HANDS:
-                raise UnknownName("hand", h, HANDS)
-        if not math.isfinite(req.tau) or req.tau < 0:
-            raise InvalidInput(f"tau: expected a finite duration >= 0 s (0 = default), "
-                               f"got {req.tau}")
+    def _goal_of(self, req, start: dict[str, float]) -> ParsedReach:
+        """Validate the request (service or action goal) and build its goal (root_link)."""
         q_start = self.planner.start_configuration(start)
-        targets, orientations = {}, {}
-        for h in hands:
-            msg = req.left_target if h == "left" else req.right_target
-            pos, quat = pose_to_arrays(msg.pose)
-            frame = msg.header.frame_id or "root_link"
-            if frame != "root_link":
-                provider = self.planner.provider
-                if frame not in provider.frame_names():
-                    raise UnknownName("frame", frame, provider.frame_names())
-                pose = provider.icub.frame_pose(q_start, frame)
-                rot = pose.rotation @ quat_wxyz_to_matrix(quat)
-                pos = pose.rotation @ pos + pose.translation
-            else:
-                rot = quat_wxyz_to_matrix(quat)
-            targets[h] = pos
-            if req.use_orientation:
-                orientations[h] = rot
-        return ReachGoal(targets=targets, orientations=orientations, use_torso=req.use_torso,
-                         tau=req.tau if req.tau > 0 else None)
+        provider = self.planner.provider
+        hand_frames = [self.planner.spec.hand_frame(h) for h in HANDS]
+        hand_positions = dict(zip(HANDS, provider.positions(q_start, hand_frames)))
+        return parse_reach_request(
+            req, frames=self._frame_lookup(q_start), hand_positions=hand_positions,
+            joint_names=self._names, config=self.params.get(ReachRequestConfig), scene=self._scene)
+
+    def _frame_lookup(self, q: np.ndarray):
+        """name -> :class:`FramePose` of that model frame at configuration ``q``."""
+        provider = self.planner.provider
+        names = provider.frame_names()
+
+        def frames(name: str) -> FramePose:
+            if name not in names:
+                raise UnknownName("frame", name, names)
+            pose = provider.icub.frame_pose(q, name)
+            return FramePose(pose.rotation.copy(), pose.translation.copy())
+
+        return frames
+
+    def _on_obstacles(self, msg: Obstacles) -> None:
+        """The /pmp/obstacles scene: kept if valid (checked with every frame at the rest
+        posture), else dropped with a throttled warning."""
+        q = self.planner.start_configuration(self.planner.spec.posture("rest"))
+        try:
+            parse_obstacles("/pmp/obstacles", msg.obstacles, self._frame_lookup(q), 0.0,
+                            self.params.get(ReachRequestConfig))
+        except IcubPmpError as exc:
+            self.warnings("obstacles", f"dropping /pmp/obstacles: {exc}")
+            return
+        self._scene = list(msg.obstacles)
+
+    def _fill_answer(self, res, plan, parsed: ParsedReach) -> None:
+        """The new result fields: object path, obstacle clearance, final torques."""
+        if plan.object_path is not None:
+            res.object_path = [_point(p) for p in plan.object_path]
+        res.obstacle_clearance = (float(plan.obstacle_clearance)
+                                  if plan.obstacle_clearance is not None else -1.0)
+        if plan.final_torques is not None:
+            res.torque_joints = list(plan.joint_names)
+            res.torques = [float(t) for t in plan.final_torques]
+            res.torques_within_limits = bool(
+                np.all(np.abs(plan.final_torques) <= plan.torque_limits))
 
     # ------------------------------------------------------------------ the action
     async def _execute_reach(self, handle) -> ReachAction.Result:
@@ -283,14 +307,17 @@ class PmpPlannerNode(Node):
             if start is None:
                 raise InvalidInput("no /joint_states received: the robot's posture is "
                                    "unknown, nothing can be executed")
-            goal = self._goal_of(req, dict(start))
+            parsed = self._goal_of(req, dict(start))
+            goal = parsed.goal
             arrival = arrival_config(self.params.get(ArrivalConfig), req.arrival_tolerance)
             plan = self.planner.plan(goal, start)
         except IcubPmpError as exc:
             return finish("rejected", str(exc))
         except Exception as exc:  # never die on a goal
             return finish("rejected", f"internal error: {type(exc).__name__}: {exc}")
+        res.hands = list(plan.hands)
         res.planned_residuals = [float(plan.residuals[h]) for h in plan.hands]
+        self._fill_answer(res, plan, parsed)
         stamp = self.get_clock().now().to_msg()
         for h in plan.hands:
             self.path_pubs[h].publish(
@@ -300,7 +327,7 @@ class PmpPlannerNode(Node):
         traj, res.tau_used, slowed = self._limited_trajectory(plan)
         res.trajectory = traj
         out = await self.execution.run(
-            traj, goal.targets, arrival, feedback, lambda: handle.is_cancel_requested,
+            traj, _final_targets(goal), arrival, feedback, lambda: handle.is_cancel_requested,
             generation)
         if out.arrival is not None:
             res.arrival_errors = [float(out.arrival.errors[h]) for h in res.hands]
@@ -309,6 +336,14 @@ class PmpPlannerNode(Node):
         return finish(out.outcome, f"{out.message} (planned: residuals "
                       + ", ".join(f"{h} {plan.residuals[h] * 1e3:.2f} mm" for h in plan.hands)
                       + f"{slowed})")
+
+
+def _final_targets(goal: ReachGoal) -> dict[str, np.ndarray]:
+    """Where each hand must arrive: its target, or its grasp point at the object's goal."""
+    out = dict(goal.targets)
+    if goal.held_object is not None:
+        out.update(goal.held_object.hand_targets())
+    return out
 
 
 def _point(p: np.ndarray) -> Point:

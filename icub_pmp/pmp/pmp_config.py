@@ -55,6 +55,8 @@ class PmpConfig(ConfigBase):
     convergence_tolerance: float = 1.0e-4  # stop when every hand is this close [m]
     rotation_tolerance: float = 1.0e-4  # and orientation this close [rad]
     boundary_fraction: float = 0.99  # max fraction of the distance to a limit per step
+    obstacle_step: float = 0.01  # [m] with obstacles: step control, hand motion per step (the
+    # sampled plan then follows the relaxation's path around them); 0 = as without obstacles
     # success (mental simulation verdict)
     success_tolerance: float = 1.0e-3  # hand within this of its target at tau [m]
     rotation_success_tolerance: float = 0.01  # [rad]
@@ -85,7 +87,7 @@ class PmpConfig(ConfigBase):
             if not math.isfinite(v) or v <= 0:
                 raise ConfigError(f"PmpConfig.{name}: expected a finite value > 0, got {v}")
         nonneg = ("curl", "joint_limit_alpha", "posture_field_gain", "start_tolerance",
-                  "max_displacement", "synchronise_hands")
+                  "max_displacement", "synchronise_hands", "obstacle_step")
         for name in nonneg:
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:

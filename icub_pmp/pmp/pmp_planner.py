@@ -21,6 +21,7 @@ Steps of :meth:`PmpPlanner.plan`:
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Mapping
 
@@ -81,16 +82,20 @@ class PmpPlanner:
         c = self.config
         self._field = ForceField(np.zeros(3), np.array(c.stiffness), c.curl, c.curl_axis)
         self._relax = Relaxation(self._settings(self.config.max_steps))
+        self._relax_obstacles = Relaxation(self._settings(
+            self.config.max_steps, max_displacement=self.config.obstacle_step or None))
         self._settle = Relaxation(self._settings(
             self.config.settle_max_steps, normalise=False, max_step=self.config.settle_max_step))
 
     def _settings(self, max_steps: int, normalise: bool = True,
-                  max_step: float | None = None) -> RelaxationSettings:
+                  max_step: float | None = None, max_displacement: float | None = None
+                  ) -> RelaxationSettings:
         c = self.config
         return RelaxationSettings(
             initial_step=c.initial_step, step_growth=c.step_growth,
             max_step=c.max_step if max_step is None else max_step,
-            max_displacement=c.max_displacement,
+            max_displacement=c.max_displacement if max_displacement is None
+            else max_displacement,
             max_steps=max_steps, stall_steps=c.stall_steps, tolerance=c.convergence_tolerance,
             rotation_tolerance=c.rotation_tolerance, boundary_fraction=c.boundary_fraction,
             normalise_rate=normalise, balance_hands=normalise and c.balance_hands,
@@ -128,7 +133,8 @@ class PmpPlanner:
                 raise UnknownName("hand", h, HANDS)
         if goal.tau is not None and goal.tau > c.max_tau:
             raise InvalidInput(f"tau: {goal.tau} s exceeds the planner's max_tau {c.max_tau} s")
-        for j in tuple(goal.frozen_joints) + tuple(goal.joint_limits):
+        for j in (tuple(goal.frozen_joints) + tuple(goal.joint_limits)
+                  + tuple(goal.torque_limits) + tuple(goal.admittance_scales)):
             if j not in self._names:
                 raise UnknownName("joint", j, self._names)
         branches = self._branches(goal)
@@ -159,14 +165,20 @@ class PmpPlanner:
         orientations = {
             h: OrientationField(r, c.rotation_stiffness) for h, r in goal.orientations.items()
         }
+        finals = [t.target for t in targets.values()]
+        if goal.held_object is not None:
+            finals += list(goal.held_object.hand_targets().values())
+        # obstacle fields do not reach the targets (the equilibrium stays on them)
+        obstacles = [ob.clear_of(finals) for ob in goal.obstacles]
         return PmpNetwork(
             self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
-            targets, orientations, goal.obstacles, limits, goal.held_object, posture,
+            targets, orientations, obstacles, limits, goal.held_object, posture,
         )
 
     def _branches(self, goal: ReachGoal) -> BranchNetwork:
         """The branching network of the goal's hands, trunk and admittance modulation."""
-        key = (goal.hands, goal.use_torso, goal.trunk_admittance_scale, goal.frozen_joints)
+        key = (goal.hands, goal.use_torso, goal.trunk_admittance_scale, goal.frozen_joints,
+               tuple(sorted(goal.admittance_scales.items())))
         branches = self._branch_cache.get(key)
         if branches is not None:
             return branches
@@ -180,9 +192,10 @@ class PmpPlanner:
             arm_a = {h: a * self._range_factor(arms[h]) for h, a in arm_a.items()}
         branches = BranchNetwork(trunk, arms, trunk_a, arm_a)
         frozen = set(goal.frozen_joints)
-        if frozen:
+        if frozen or goal.admittance_scales:
             a = branches.admittance.copy()
             for i, j in enumerate(branches.joint_names):
+                a[i] *= goal.admittance_scales.get(j, 1.0)
                 if j in frozen:
                     a[i] = 0.0
             branches = branches.with_admittance(
@@ -206,7 +219,8 @@ class PmpPlanner:
         c = self.config
         q0 = self.start_configuration(q_start)
         net = self.build_network(goal, q0)
-        trace = self._relax.run(net)
+        relax = self._relax_obstacles if goal.obstacles else self._relax
+        trace = relax.run(net)
         attempts, used_memory = 1, False
         if not self._reached(trace) and c.posture_memory_size > 0:
             recalls = self._memory(net).recall(
@@ -214,7 +228,7 @@ class PmpPlanner:
             )
             for recall in recalls:
                 field = PostureField(recall.q, c.posture_field_gain, c.posture_field_decay)
-                trace2 = self._relax.run(self.build_network(goal, q0, posture=field))
+                trace2 = relax.run(self.build_network(goal, q0, posture=field))
                 attempts += 1
                 if self._score(trace2) < self._score(trace):
                     trace, used_memory = trace2, True
@@ -222,7 +236,7 @@ class PmpPlanner:
                     break
         null_space = np.zeros(trace.steps, dtype=bool)
         torque_field = None
-        if goal.target_forces:
+        if goal.target_forces or goal.torque_limits:
             trace, null_space, torque_field = self._settle_torques(goal, net, trace)
         return self._make_plan(goal, net, trace, null_space, torque_field, attempts,
                                used_memory, t0)
@@ -275,10 +289,12 @@ class PmpPlanner:
         """Sect. 2.3: from the equilibrium, relax with the saturation field (null space)."""
         c = self.config
         hands = tuple(h for h in net.hands if h in goal.target_forces)
-        limits = np.array([self.spec.torque_limit(j) for j in self._names])
+        limits = np.array([goal.torque_limits.get(j) or self.spec.torque_limit(j)
+                           for j in self._names])
         field = TorqueLimitField(
             self.provider, [self.spec.hand_frame(h) for h in hands],
-            np.array([goal.target_forces[h] for h in hands]), limits, net.joint_index,
+            np.array([goal.target_forces[h] for h in hands]).reshape(len(hands), 3), limits,
+            net.joint_index,
             gravity=c.torque_gravity, margin=c.torque_limit_margin,
         )
         net2 = PmpNetwork(
@@ -347,11 +363,24 @@ class PmpPlanner:
         ok = all(r <= c.success_tolerance for r in residuals.values()) and all(
             r <= c.rotation_success_tolerance for r in rot_res.values()
         )
-        torque_ratio = None
+        torque_ratio, final_torques, torque_limits = None, None, None
         if torque_field is not None:
             torque_ratio = torque_field.violation(q_final)
             ok = ok and torque_ratio <= 1.0
-        message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory)
+            final_torques = torque_field.required_torques(q_final)[net.joint_index]
+            torque_limits = torque_field.limits[net.joint_index].copy()
+        hand_paths = functools.lru_cache(maxsize=1)(
+            lambda: self._hand_paths(net.hands, net.frames, q_full))
+        clearance, kept = None, True
+        if net.obstacles:  # judged on the sampled plan, not only the relaxation's nodes
+            pts = np.concatenate(list(hand_paths().values()))
+            clearance = min(float(np.min(ob.surface_distance(pts))) for ob in net.obstacles)
+            kept = min(float(np.min(ob.clearance(pts))) for ob in net.obstacles) >= 0.0
+            ok = ok and kept
+        message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory,
+                                not kept, bool(net.obstacles))
+        if clearance is not None:
+            message += f"; obstacle clearance {clearance * 1e3:.1f} mm"
         plan = ReachPlan(
             hands=net.hands,
             joint_names=net.branches.joint_names,
@@ -370,7 +399,10 @@ class PmpPlanner:
             torque_ratio=torque_ratio,
             attempts=attempts,
             used_memory=used_memory,
-            path_function=lambda: self._hand_paths(net.hands, net.frames, q_full),
+            path_function=hand_paths,
+            obstacle_clearance=clearance,
+            final_torques=final_torques,
+            torque_limits=torque_limits,
         )
         return plan
 
@@ -378,7 +410,8 @@ class PmpPlanner:
         paths = np.array([self.provider.positions(q, frames) for q in q_full])
         return {h: paths[:, i, :].copy() for i, h in enumerate(hands)}
 
-    def _message(self, hands, residuals, rot_res, ok, torque_ratio, used_memory) -> str:
+    def _message(self, hands, residuals, rot_res, ok, torque_ratio, used_memory,
+                 blocked=False, obstacles=False) -> str:
         c = self.config
         parts = [f"{h} {residuals[h] * 1e3:.2f} mm" for h in hands]
         text = "residuals " + ", ".join(parts)
@@ -390,8 +423,13 @@ class PmpPlanner:
             short = [h for h in hands if residuals[h] > c.success_tolerance]
             if short:
                 worst = max(short, key=lambda h: residuals[h])
-                head = (f"out of reach: {worst} hand ends {residuals[worst] * 1e3:.1f} mm from "
-                        f"its target (a tool that long would be needed)")
+                head = f"{worst} hand ends {residuals[worst] * 1e3:.1f} mm from its target"
+                head = (f"out of reach or blocked by the obstacles (no path found that keeps "
+                        f"the clearance): {head}" if obstacles else
+                        f"out of reach: {head} (a tool that long would be needed)")
+            elif blocked:
+                head = ("blocked: no path found that keeps the asked clearance from the "
+                        "obstacles")
             elif torque_ratio is not None and torque_ratio > 1.0:
                 head = f"torque limits exceeded by a factor {torque_ratio:.2f} after settling"
             else:

@@ -51,6 +51,9 @@ class ReachGoal:
             triggers the torque-limit settling of Sect. 2.3.
         held_object: an object carried by its grasping hands (Sect. 3.2).
         trunk_admittance_scale: multiplies A_trunk (0 = grounded shoulders, Fig 7).
+        torque_limits: joint -> limit [N m] replacing the model's rating in the torque-limit
+            settling of Sect. 2.3 (settling runs when this or ``target_forces`` is given).
+        admittance_scales: joint -> factor >= 0 on its admittance (0 = frozen).
     """
 
     targets: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
@@ -63,6 +66,8 @@ class ReachGoal:
     target_forces: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
     held_object: HeldObject | None = None
     trunk_admittance_scale: float = 1.0
+    torque_limits: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    admittance_scales: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "targets", _frozen_vectors("targets", self.targets, (3,)))
@@ -86,6 +91,16 @@ class ReachGoal:
                 raise InvalidInput(f"joint_limits[{j!r}]: need finite lower < upper, got {lim}")
             limits[j] = (lo, hi)
         object.__setattr__(self, "joint_limits", MappingProxyType(limits))
+        for name, lowest in (("torque_limits", 0.0), ("admittance_scales", None)):
+            checked = {}
+            for j, v in dict(getattr(self, name)).items():
+                v = float(v)
+                if not math.isfinite(v) or v < 0 or (lowest is not None and v <= lowest):
+                    bound = "> 0" if lowest is not None else ">= 0"
+                    raise InvalidInput(f"{name}[{j!r}]: expected a finite value {bound}, "
+                                       f"got {v}")
+                checked[str(j)] = v
+            object.__setattr__(self, name, MappingProxyType(checked))
         object.__setattr__(self, "obstacles", tuple(self.obstacles))
         object.__setattr__(self, "frozen_joints", tuple(self.frozen_joints))
         if self.tau is not None and (not math.isfinite(self.tau) or self.tau <= 0):

@@ -36,6 +36,11 @@ class ReachPlan:
         trace: the relaxation nodes (relaxation time s, states, hand positions).
         object_path: (N, 3) held-object path [m], or None.
         torque_ratio: max |tau_i| / tau_max_i at tau after settling (None without forces).
+        obstacle_clearance: smallest distance [m] from a hand to an obstacle surface along
+            the sampled plan (None without obstacles).
+        final_torques: (n,) joint torques [N m] needed at the final posture (target forces
+            + gravity) over ``joint_names`` (None without target forces or torque limits).
+        torque_limits: (n,) the limits [N m] they were held to (None likewise).
         attempts: relaxations run (1 + those guided by remembered postures).
         used_memory: whether the posture-memory relaxation gave the returned plan.
     """
@@ -57,12 +62,16 @@ class ReachPlan:
     torque_ratio: float | None = None
     attempts: int = 1
     used_memory: bool = False
+    obstacle_clearance: float | None = None
+    final_torques: np.ndarray | None = None
+    torque_limits: np.ndarray | None = None
     path_function: Callable[[], Mapping[str, np.ndarray]] | None = dataclasses.field(
         default=None, repr=False, compare=False
     )
 
     def __post_init__(self) -> None:
-        for name in ("t", "positions", "velocities", "q_start", "q_final", "object_path"):
+        for name in ("t", "positions", "velocities", "q_start", "q_final", "object_path",
+                     "final_torques", "torque_limits"):
             a = getattr(self, name)
             if isinstance(a, np.ndarray):
                 a.setflags(write=False)
@@ -72,7 +81,7 @@ class ReachPlan:
         """hand -> (N, 3) predicted hand path [m] (forward kinematics of the samples)."""
         paths = self.path_function() if self.path_function is not None else {}
         for a in paths.values():
-            a.setflags(write=False)
+            a.setflags(write=False)  # (the plan's cached paths: never written)
         return paths
 
     @property

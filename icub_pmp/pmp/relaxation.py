@@ -31,7 +31,8 @@ evenly spread along the hand paths, at the cost of more steps on long paths.
 
 Joint limits are never crossed: every joint may cover at most ``boundary_fraction`` of its
 remaining distance to a limit (kept 1e-9 of its range away) per step. A step that would put a
-hand inside an obstacle is halved and retried. Obstacles (explicit) and the ``F`` of the
+hand inside an obstacle (or, with obstacles and step control, moves a hand more than twice
+``max_displacement``) is halved and retried. Obstacles (explicit) and the ``F`` of the
 fields are evaluated at the start of the step.
 
 Before the first step the hands' fields may be balanced (:meth:`PmpNetwork.balance_hands`) and
@@ -127,6 +128,12 @@ class RelaxationTrace(NamedTuple):
         return float(self.position_errors[-1].max()) if self.position_errors.size else 0.0
 
 
+def _jump(a: NetworkState, b: NetworkState) -> float:
+    """Largest hand displacement [m] from state a to state b."""
+    dx = b.hand_positions - a.hand_positions
+    return float(np.sqrt((dx * dx).sum(axis=1)).max())
+
+
 class Relaxation:
     """Integrates a :class:`PmpNetwork` from a state to its equilibrium."""
 
@@ -199,7 +206,8 @@ class Relaxation:
                 kmat = network.field_stiffness
             jac = state.jacobian
             g = jac.T @ state.force + state.torque
-            for _ in range(12):  # step halving only when a hand would enter an obstacle
+            for _ in range(12):  # step halving when a hand would enter an obstacle (or, among
+                # obstacles with step control, jump more than twice the step's hand motion)
                 ha = h * a
                 bmat = ha / (1.0 + ha * state.stiffness)
                 gb = jac * bmat
@@ -210,7 +218,10 @@ class Relaxation:
                 dz[:n] = np.minimum(np.maximum(dz[:n], flo - fz), fhi - fz)
                 z_new = z + dz
                 new_state = network.evaluate(z_new, s + h)
-                if not network.obstacles or new_state.clearance > 0.0:
+                if not network.obstacles:
+                    break
+                if new_state.clearance > 0.0 and not (adaptive and _jump(
+                        state, new_state) > 2.0 * cfg.max_displacement):
                     break
                 h *= 0.5
             if adaptive:
