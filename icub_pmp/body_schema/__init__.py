@@ -1,0 +1,36 @@
+"""The learned body schema (Bhat and Mohan, "Internal Body Model", eqs 1-2) and the learned
+eye-hand map (force paper eq 12): tanh networks trained by Levenberg-Marquardt on babbling
+data, a PMP body model from their Jacobians, and motor babbling itself. No ROS imports."""
+
+from icub_pmp.body_schema.body_network import DEFAULT_HIDDEN, BodyNetwork, BodyPrediction
+from icub_pmp.body_schema.eye_hand_map import (
+    DEFAULT_EYE_HAND_HIDDEN,
+    EYE_HAND_INPUTS,
+    EyeHandMap,
+)
+from icub_pmp.body_schema.learned_jacobian_provider import LearnedJacobianProvider
+from icub_pmp.body_schema.lm_trainer import (
+    LmTrainer,
+    LmTrainerConfig,
+    TrainingReport,
+    check_dataset,
+)
+from icub_pmp.body_schema.model_file import load_model, save_model
+from icub_pmp.body_schema.tanh_mlp import TanhMlp
+
+__all__ = [
+    "BodyNetwork",
+    "BodyPrediction",
+    "DEFAULT_EYE_HAND_HIDDEN",
+    "DEFAULT_HIDDEN",
+    "EYE_HAND_INPUTS",
+    "EyeHandMap",
+    "LearnedJacobianProvider",
+    "LmTrainer",
+    "LmTrainerConfig",
+    "TanhMlp",
+    "TrainingReport",
+    "check_dataset",
+    "load_model",
+    "save_model",
+]
