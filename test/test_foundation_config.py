@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from icub_pmp.body_schema import BabblingConfig, MarkerDetectorConfig
 from icub_pmp.cartesian import IkConfig, MinJerkConfig
 from icub_pmp.config import ConfigBase, config_dir, load_params_file
 from icub_pmp.control import ImpedanceControllerConfig
@@ -24,6 +25,7 @@ from icub_sim_bridge import SimConfig
 
 #: config/<node>.yaml -> the configuration classes the node declares as its parameters
 NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
+    "body_schema": (BabblingConfig, MarkerDetectorConfig),
     "cartesian_solver": (IkConfig, MinJerkConfig, CartesianNodeConfig, ArrivalConfig),
     "gaze_controller": (GazeControllerConfig, GazeNodeConfig),
     "impedance_controller": (ImpedanceControllerConfig,),

@@ -2,6 +2,16 @@
 eye-hand map (force paper eq 12): tanh networks trained by Levenberg-Marquardt on babbling
 data, a PMP body model from their Jacobians, and motor babbling itself. No ROS imports."""
 
+from icub_pmp.body_schema.babbling import (
+    HEAD_JOINTS,
+    LEARNER_FIELDS,
+    BabblingDataset,
+    BabblingSample,
+    MotorBabbling,
+    load_dataset,
+    min_jerk_move,
+)
+from icub_pmp.body_schema.babbling_config import BabblingConfig
 from icub_pmp.body_schema.body_network import DEFAULT_HIDDEN, BodyNetwork, BodyPrediction
 from icub_pmp.body_schema.eye_hand_map import (
     DEFAULT_EYE_HAND_HIDDEN,
@@ -15,10 +25,26 @@ from icub_pmp.body_schema.lm_trainer import (
     TrainingReport,
     check_dataset,
 )
+from icub_pmp.body_schema.marker_detector import (
+    MarkerDetection,
+    MarkerDetector,
+    MarkerDetectorConfig,
+)
 from icub_pmp.body_schema.model_file import load_model, save_model
 from icub_pmp.body_schema.tanh_mlp import TanhMlp
 
 __all__ = [
+    "BabblingConfig",
+    "BabblingDataset",
+    "BabblingSample",
+    "HEAD_JOINTS",
+    "LEARNER_FIELDS",
+    "MarkerDetection",
+    "MarkerDetector",
+    "MarkerDetectorConfig",
+    "MotorBabbling",
+    "load_dataset",
+    "min_jerk_move",
     "BodyNetwork",
     "BodyPrediction",
     "DEFAULT_EYE_HAND_HIDDEN",

@@ -20,13 +20,14 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any, Mapping, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse.linalg import LinearOperator
 
 from icub_pmp.body_schema.tanh_mlp import TanhMlp
+from icub_pmp.config import ConfigBase
 from icub_pmp.errors import ConfigError, InvalidInput
 
 __all__ = ["LmTrainerConfig", "TrainingReport", "LmTrainer", "check_dataset"]
@@ -35,7 +36,7 @@ METHODS = ("lm", "trf", "trf-lsmr")
 
 
 @dataclasses.dataclass(frozen=True)
-class LmTrainerConfig:
+class LmTrainerConfig(ConfigBase):
     """Settings of :class:`LmTrainer`.
 
     Attributes:
@@ -58,7 +59,8 @@ class LmTrainerConfig:
     seed: int = 0
     lsmr_iterations: int = 40
 
-    def __post_init__(self) -> None:
+    def validate(self) -> None:
+        """Ranges (raise :class:`ConfigError` naming the field)."""
         if self.method not in METHODS:
             raise ConfigError(f"method: expected one of {METHODS}, got {self.method!r}")
         if self.max_evaluations < 1:
@@ -68,14 +70,6 @@ class LmTrainerConfig:
         if self.lsmr_iterations < 1:
             raise ConfigError(f"lsmr_iterations: expected >= 1, got {self.lsmr_iterations}")
 
-    @classmethod
-    def from_dict(cls, values: Mapping[str, Any]) -> "LmTrainerConfig":
-        """Build from a dict, rejecting unknown keys by name."""
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - names)
-        if unknown:
-            raise ConfigError(f"LmTrainerConfig: unknown keys {unknown}; valid: {sorted(names)}")
-        return cls(**dict(values))
 
 
 class TrainingReport(NamedTuple):
