@@ -338,7 +338,7 @@ class ModelBuilder:
         radius = self.config.hand_marker_radius
         if radius <= 0.0:
             return
-        for hand, frame in self.robot.hand_frames.items():
+        for frame in self.robot.hand_frames.values():
             site = s.site(frame)
             if site is None:
                 raise ModelError(f"hand frame {frame!r} is not a site of the model")
