@@ -92,3 +92,19 @@ def test_babbling_run_produces_a_dataset(graph, ros_probe, data_dir):
     assert data.meta["arm"] == "right" and data.meta["joint_names"] == list(spec.right_arm_joints)
     assert data.meta["evaluation_only"] == ["ground_truth"]
     assert data.meta["dropped"] == last.dropped and data.meta["samples"] == SAMPLES
+
+
+def test_icub_babble_command(graph, ros_probe, data_dir):
+    """``icub babble --arm right --samples 4 --name cli_run`` shows a progress bar, prints the
+    dataset path, exits 0, and the dataset holds the 4 samples."""
+    from icub_interfaces.srv import StartBabbling
+    from icub_pmp.testing import run_icub
+
+    assert ros_probe.wait_for_service("/body_schema/start_babbling", StartBabbling, 180)
+    out = run_icub("babble", "--arm", "right", "--samples", "4", "--name", "cli_run",
+                   timeout=900)
+    assert out.returncode == 0, (out.stdout, out.stderr)
+    assert "%" in out.stderr and "samples" in out.stderr
+    path = data_dir / "cli_run.npz"
+    assert f"dataset: {path}" in out.stdout, out.stdout
+    assert load_dataset(path).learner["q"].shape == (4, 7)

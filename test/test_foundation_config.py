@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from icub_pmp.body_schema import BabblingConfig, MarkerDetectorConfig
+from icub_pmp.body_schema import BabblingConfig, JacobianSourceConfig, MarkerDetectorConfig
 from icub_pmp.cartesian import IkConfig, MinJerkConfig
 from icub_pmp.config import ConfigBase, config_dir, load_params_file
 from icub_pmp.control import ImpedanceControllerConfig
@@ -30,7 +30,7 @@ NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
     "gaze_controller": (GazeControllerConfig, GazeNodeConfig),
     "impedance_controller": (ImpedanceControllerConfig,),
     "motion_segmenter": (MotionSegmenterConfig, StereoTargetConfig),
-    "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig),
+    "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig, JacobianSourceConfig),
     "robot_state_publisher": (RobotStatePublisherConfig,),
     "sim_bridge": (SimConfig,),
     "wrench_estimator": (WrenchEstimatorConfig,),

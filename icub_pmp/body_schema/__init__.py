@@ -18,6 +18,11 @@ from icub_pmp.body_schema.eye_hand_map import (
     EYE_HAND_INPUTS,
     EyeHandMap,
 )
+from icub_pmp.body_schema.jacobian_source import (
+    JACOBIAN_SOURCES,
+    JacobianSourceConfig,
+    make_provider,
+)
 from icub_pmp.body_schema.learned_jacobian_provider import LearnedJacobianProvider
 from icub_pmp.body_schema.lm_trainer import (
     LmTrainer,
@@ -51,7 +56,10 @@ __all__ = [
     "DEFAULT_HIDDEN",
     "EYE_HAND_INPUTS",
     "EyeHandMap",
+    "JACOBIAN_SOURCES",
+    "JacobianSourceConfig",
     "LearnedJacobianProvider",
+    "make_provider",
     "LmTrainer",
     "LmTrainerConfig",
     "TanhMlp",

@@ -9,6 +9,7 @@
     icub param list|get|set|dump   node parameters (ros2 param)
     icub reach right=X,Y,Z ...     send a PMP reach goal to /pmp/reach_action
     icub bag record|play|info|convert   MCAP bags (rosbag2 layout)
+    icub babble --arm right --samples N   motor babbling for the learned body schema
 
 VALUES use ros2cli's YAML syntax, e.g. ``"{target: box, wrench: {force: {z: 1.0}}}"``.
 
@@ -30,7 +31,8 @@ from icub_pmp.errors import IcubPmpError
 __all__ = ["main", "build_parser"]
 
 #: subcommand modules of icub_pmp.cli, in the order of ``icub --help``
-SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "bag")
+SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "bag",
+               "babble")
 
 
 def build_parser() -> argparse.ArgumentParser:

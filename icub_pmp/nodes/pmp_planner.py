@@ -49,13 +49,16 @@ from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.action import Reach as ReachAction
 from icub_interfaces.srv import Reach
+from icub_pmp.body_schema.jacobian_source import JacobianSourceConfig, make_provider
 from icub_pmp.control.arrival_monitor import ArrivalConfig
 from icub_pmp.control.joint_trajectory import JointTrajectory as CoreTrajectory
 from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory_time
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_model import IcubModel
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.kinematics.rotations import quat_wxyz_to_matrix
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
+from icub_pmp.pmp.pinocchio_provider import PinocchioJacobianProvider
 from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     joint_state_field,
@@ -78,9 +81,15 @@ class PmpPlannerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("pmp_planner")
-        self.params = ConfigParameters(self, (PmpConfig, PmpNodeConfig, ArrivalConfig),
-                                       on_change=self._on_config_change)
-        self.planner = PmpPlanner(self.config)
+        self.params = ConfigParameters(
+            self, (PmpConfig, PmpNodeConfig, ArrivalConfig, JacobianSourceConfig),
+            on_change=self._on_config_change, read_only=JacobianSourceConfig.field_names())
+        # the body model PMP plans on (jacobian_source: the URDF or learned body networks);
+        # the URDF model also serves the measured hands and the targets' frames
+        provider = make_provider(self.params.get(JacobianSourceConfig))
+        self.planner = PmpPlanner(self.config, provider=provider)
+        self.urdf = (provider.icub if isinstance(provider, PinocchioJacobianProvider)
+                     else IcubModel(self.planner.spec))
         self._names = self.planner.provider.joint_names
         self._valid_state_names = set(self.planner.spec.actuated_joints)
         self.joint_states = JointStateCache(self)
@@ -93,7 +102,8 @@ class PmpPlannerNode(Node):
         }
         if self.node_config.warm_up:
             t0 = time.perf_counter()
-            self.planner.warm_up()
+            self.planner.warm_up(hands=tuple(
+                h for h in HANDS if self.planner.spec.hand_frame(h) in provider.frame_names()))
             self.get_logger().info(
                 f"posture memory ready ({self.config.posture_memory_size} postures, "
                 f"{time.perf_counter() - t0:.2f} s)")
@@ -101,7 +111,7 @@ class PmpPlannerNode(Node):
         # requests and responses on /pmp/reach/_service_event, so bags record reach goals
         srv.configure_introspection(
             self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
-        icub = self.planner.provider.icub
+        icub = self.urdf
         frames = {h: self.planner.spec.hand_frame(h) for h in HANDS}
 
         def hands(st: MeasuredState) -> dict[str, np.ndarray]:
@@ -242,10 +252,8 @@ class PmpPlannerNode(Node):
             pos, quat = pose_to_arrays(msg.pose)
             frame = msg.header.frame_id or "root_link"
             if frame != "root_link":
-                provider = self.planner.provider
-                if frame not in provider.frame_names():
-                    raise UnknownName("frame", frame, provider.frame_names())
-                pose = provider.icub.frame_pose(q_start, frame)
+                pose = self.urdf.frame_pose(
+                    self.urdf.q_from_dict(dict(zip(self._names, q_start))), frame)
                 rot = pose.rotation @ quat_wxyz_to_matrix(quat)
                 pos = pose.rotation @ pos + pose.translation
             else:
