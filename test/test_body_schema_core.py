@@ -306,3 +306,19 @@ def test_min_jerk_move_respects_the_rate_limits():
     assert np.max(np.abs(qd)) <= 0.7 + 1e-9 and t[-1] > 0.5
     t2, _, _ = min_jerk_move(np.zeros(2), np.full(2, 0.01), np.ones(2), np.ones(2) * 10, 0.5)
     assert t2[-1] == pytest.approx(0.5)
+
+
+def test_jacobian_source_config(planar, tmp_path):
+    """jacobian_source: an unknown source or 'learned' without model files is a ConfigError;
+    a model file of the other arm is refused naming both arms; 'analytic' is the URDF."""
+    from icub_pmp.body_schema import JacobianSourceConfig, make_provider
+
+    with pytest.raises(ConfigError, match="jacobian_source"):
+        JacobianSourceConfig(jacobian_source="neural")
+    with pytest.raises(ConfigError, match="needs learned_model_right"):
+        JacobianSourceConfig(jacobian_source="learned")
+    path = planar[0].save(tmp_path / "right.npz")
+    with pytest.raises(ConfigError, match="right arm, not of the left arm"):
+        make_provider(JacobianSourceConfig(jacobian_source="learned",
+                                           learned_model_left=str(path)))
+    assert isinstance(make_provider(JacobianSourceConfig()), PinocchioJacobianProvider)
