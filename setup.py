@@ -8,6 +8,7 @@ PACKAGE = "icub_pmp"
 
 # One entry per node executable (`ros2 run icub_pmp <name>`): name -> module with its main().
 NODES = {
+    "body_schema": f"{PACKAGE}.nodes.body_schema",
     "cartesian_solver": f"{PACKAGE}.nodes.cartesian_solver",
     "gaze_controller": f"{PACKAGE}.nodes.gaze_controller",
     "impedance_controller": f"{PACKAGE}.nodes.impedance_controller",

@@ -37,6 +37,9 @@ What the model is
   the URDF sensor origin), head IMU (``head_imu_0``: gyro, accelerometer, orientation).
 - Cameras ``left_eye_camera`` / ``right_eye_camera`` at the eyes' optical frames (MuJoCo looks
   along -z with +y up: optical frame rotated pi about x), ``fovy`` from fy.
+- Hand markers: a small green sphere on each hand (visual only, no contact, no mass) at
+  ``hand_marker_offset`` in the hand DH frame, the coloured marker iCub babbling experiments
+  track; geom ``<l|r>_hand_marker`` (:data:`HAND_MARKER_RGBA`).
 - Rendering: simplified visual meshes (vertex clustering, ``visual_mesh_cell``), legs and
   head shell (the eyes sit inside it) and collision hulls in geom groups the eye cameras do
   not draw, one light without shadows.
@@ -62,7 +65,7 @@ from icub_pmp.kinematics.urdf_robot import UrdfRobot
 from icub_sim_bridge.sim_config import SimConfig
 
 __all__ = ["ModelBuilder", "BuiltModel", "GROUP_VISUAL", "GROUP_LEGS", "GROUP_COLLISION",
-           "OBJECT_NAMES", "EYE_CAMERAS"]
+           "OBJECT_NAMES", "EYE_CAMERAS", "HAND_MARKER_RGBA"]
 
 #: geom groups: eye cameras draw groups 0 (robot upper body, scene) and 1 (objects) only.
 GROUP_VISUAL = 0
@@ -77,6 +80,8 @@ _BIT_RIGHT_ARM = 8  # right hand, wrist, forearm, elbow, upper arm
 _BIT_ARM = _BIT_LEFT_ARM | _BIT_RIGHT_ARM
 OBJECT_NAMES = ("box", "cylinder")
 EYE_CAMERAS = {"left": "left_eye_camera", "right": "right_eye_camera"}
+#: colour of the hand markers (a green no other object in the scene has)
+HAND_MARKER_RGBA = (0.1, 0.9, 0.1, 1.0)
 
 _ARM_COLLIDE = ("upper_arm", "elbow_1", "forearm", "wrist_1", "hand")
 _ARM_TORSO_COLLIDE = ("forearm", "wrist_1", "hand")  # the hulls of the upper arms overlap
@@ -153,6 +158,7 @@ class ModelBuilder:
         ft = self._add_ft_sensors(s)
         self._add_imu(s)
         self._add_scene(s)
+        self._add_hand_markers(s)
         try:
             model = s.compile()
         except Exception as exc:  # mujoco raises ValueError with the compiler message
@@ -326,6 +332,27 @@ class ModelBuilder:
             t.range = list(EYE_LIMITS[name])
             t.limited = mujoco.mjtLimited.mjLIMITED_TRUE
         return eyes
+
+    def _add_hand_markers(self, s: mujoco.MjSpec) -> None:
+        """A visual-only sphere on each hand at ``hand_marker_offset`` in its DH frame."""
+        radius = self.config.hand_marker_radius
+        if radius <= 0.0:
+            return
+        for frame in self.robot.hand_frames.values():
+            site = s.site(frame)
+            if site is None:
+                raise ModelError(f"hand frame {frame!r} is not a site of the model")
+            R = np.zeros(9)
+            mujoco.mju_quat2Mat(R, np.asarray(site.quat, dtype=float))
+            pos = np.asarray(site.pos) + R.reshape(3, 3) @ np.asarray(
+                self.config.hand_marker_offset, dtype=float)
+            g = site.parent.add_geom(name=f"{frame[:2]}hand_marker",
+                                     type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius, 0, 0],
+                                     pos=pos)
+            g.rgba = list(HAND_MARKER_RGBA)
+            g.contype = g.conaffinity = 0
+            g.group = GROUP_VISUAL
+            g.mass = 0.0
 
     # ------------------------------------------------------------------ actuators, sensors
     def _add_actuators(self, s: mujoco.MjSpec) -> None:

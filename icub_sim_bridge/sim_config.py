@@ -42,6 +42,9 @@ class SimConfig(ConfigBase):
     camera_cx: float = 160.0  # [px]
     camera_cy: float = 120.0  # [px]
     camera_threaded: bool = True  # render off the physics thread
+    # --- hand markers (body-schema babbling: the coloured marker the cameras track) ----------
+    hand_marker_radius: float = 0.015  # [m] sphere on each hand, visual only; 0 = none
+    hand_marker_offset: tuple[float, ...] = (0.0, -0.03, 0.0)  # [m] in the hand_dh_frame (back)
     visual_mesh_cell: float = 0.008  # [m] vertex-clustering cell of the rendered meshes
     # --- joint physics (see icub_sim_bridge/model_builder.py for sources) --------------------
     joint_damping: float = -1.0  # [N m s/rad]; < 0: the URDF <dynamics damping> (1.0)
@@ -103,5 +106,9 @@ class SimConfig(ConfigBase):
                      "armature_small", "armature_eyes"):
             if getattr(self, name) <= 0.0:
                 raise ConfigError(f"SimConfig.{name}: expected > 0, got {getattr(self, name)}")
+        if self.hand_marker_radius < 0.0 or len(self.hand_marker_offset) != 3:
+            raise ConfigError(f"SimConfig.hand_marker_radius/offset: expected a radius >= 0 [m] "
+                              f"and 3 offsets [m], got {self.hand_marker_radius}, "
+                              f"{list(self.hand_marker_offset)}")
         if min(self.table_size) <= 0 or min(self.box_size) <= 0:
             raise ConfigError("SimConfig.table_size/box_size: extents must be > 0")

@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from icub_pmp.body_schema import BabblingConfig, JacobianSourceConfig, MarkerDetectorConfig
 from icub_pmp.cartesian import IkConfig, MinJerkConfig
 from icub_pmp.config import ConfigBase, config_dir, load_params_file
 from icub_pmp.control import ImpedanceControllerConfig
@@ -27,12 +28,14 @@ from icub_sim_bridge import SimConfig
 
 #: config/<node>.yaml -> the configuration classes the node declares as its parameters
 NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
+    "body_schema": (BabblingConfig, MarkerDetectorConfig),
     "cartesian_solver": (IkConfig, MinJerkConfig, CartesianNodeConfig, ArrivalConfig),
     "gaze_controller": (GazeControllerConfig, GazeNodeConfig),
     "impedance_controller": (ImpedanceControllerConfig,),
     "motion_segmenter": (MotionSegmenterConfig, StereoTargetConfig),
     "peripersonal_space": (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig),
-    "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig, ReachRequestConfig),
+    "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig, ReachRequestConfig,
+                    JacobianSourceConfig),
     "robot_state_publisher": (RobotStatePublisherConfig,),
     "sim_bridge": (SimConfig,),
     "wrench_estimator": (WrenchEstimatorConfig,),

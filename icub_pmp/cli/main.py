@@ -10,6 +10,7 @@
     icub reach right=X,Y,Z ...     send a PMP reach goal to /pmp/reach_action
     icub peri check|allocate|empty|plan-pair ...   peripersonal space queries
     icub bag record|play|info|convert|repair   MCAP bags (rosbag2 layout)
+    icub babble --arm right --samples N   motor babbling for the learned body schema
 
 VALUES use ros2cli's YAML syntax, e.g. ``"{target: box, wrench: {force: {z: 1.0}}}"``.
 
@@ -32,7 +33,7 @@ __all__ = ["main", "build_parser"]
 
 #: subcommand modules of icub_pmp.cli, in the order of ``icub --help``
 SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "peri",
-               "bag")
+               "bag", "babble")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -49,12 +49,15 @@ from trajectory_msgs.msg import JointTrajectory
 from icub_interfaces.action import Reach as ReachAction
 from icub_interfaces.msg import Obstacles
 from icub_interfaces.srv import Reach
+from icub_pmp.body_schema.jacobian_source import JacobianSourceConfig, make_provider
 from icub_pmp.control.arrival_monitor import ArrivalConfig
 from icub_pmp.control.joint_trajectory import JointTrajectory as CoreTrajectory
 from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory_time
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
+from icub_pmp.kinematics.robot_model import IcubModel
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal
+from icub_pmp.pmp.pinocchio_provider import PinocchioJacobianProvider
 from icub_pmp.ros.conversions import (
     arrays_to_trajectory,
     joint_state_field,
@@ -84,10 +87,17 @@ class PmpPlannerNode(Node):
 
     def __init__(self) -> None:
         super().__init__("pmp_planner")
-        self.params = ConfigParameters(self, (PmpConfig, PmpNodeConfig, ArrivalConfig,
-                                              ReachRequestConfig),
-                                       on_change=self._on_config_change)
-        self.planner = PmpPlanner(self.config)
+        self.params = ConfigParameters(
+            self, (PmpConfig, PmpNodeConfig, ArrivalConfig, ReachRequestConfig,
+                   JacobianSourceConfig),
+            on_change=self._on_config_change, read_only=JacobianSourceConfig.field_names())
+        # the body model PMP plans on (jacobian_source: the URDF or learned body networks);
+        # the URDF model also serves the measured hands, the targets' and obstacles' frames
+        provider = make_provider(self.params.get(JacobianSourceConfig))
+        self.planner = PmpPlanner(self.config, provider=provider)
+        self.urdf_provider = (provider if isinstance(provider, PinocchioJacobianProvider)
+                              else PinocchioJacobianProvider(IcubModel(self.planner.spec)))
+        self.urdf = self.urdf_provider.icub
         self._names = self.planner.provider.joint_names
         self._valid_state_names = set(self.planner.spec.actuated_joints)
         self.joint_states = JointStateCache(self)
@@ -100,7 +110,8 @@ class PmpPlannerNode(Node):
         }
         if self.node_config.warm_up:
             t0 = time.perf_counter()
-            self.planner.warm_up()
+            self.planner.warm_up(hands=tuple(
+                h for h in HANDS if self.planner.spec.hand_frame(h) in provider.frame_names()))
             self.get_logger().info(
                 f"posture memory ready ({self.config.posture_memory_size} postures, "
                 f"{time.perf_counter() - t0:.2f} s)")
@@ -111,7 +122,7 @@ class PmpPlannerNode(Node):
         # requests and responses on /pmp/reach/_service_event, so bags record reach goals
         srv.configure_introspection(
             self.get_clock(), QoSProfile(depth=100), ServiceIntrospectionState.CONTENTS)
-        icub = self.planner.provider.icub
+        icub = self.urdf
         frames = {h: self.planner.spec.hand_frame(h) for h in HANDS}
 
         def hands(st: MeasuredState) -> dict[str, np.ndarray]:
@@ -236,22 +247,25 @@ class PmpPlannerNode(Node):
     def _goal_of(self, req, start: dict[str, float]) -> ParsedReach:
         """Validate the request (service or action goal) and build its goal (root_link)."""
         q_start = self.planner.start_configuration(start)
-        provider = self.planner.provider
+        q_urdf = self._urdf_q(q_start)
         hand_frames = [self.planner.spec.hand_frame(h) for h in HANDS]
-        hand_positions = dict(zip(HANDS, provider.positions(q_start, hand_frames)))
+        hand_positions = dict(zip(HANDS, self.urdf_provider.positions(q_urdf, hand_frames)))
         return parse_reach_request(
-            req, frames=self._frame_lookup(q_start), hand_positions=hand_positions,
+            req, frames=self._frame_lookup(q_urdf), hand_positions=hand_positions,
             joint_names=self._names, config=self.params.get(ReachRequestConfig), scene=self._scene)
 
+    def _urdf_q(self, q: np.ndarray) -> np.ndarray:
+        """The URDF model's configuration of the planner's configuration ``q``."""
+        return self.urdf.q_from_dict(dict(zip(self._names, q)))
+
     def _frame_lookup(self, q: np.ndarray):
-        """name -> :class:`FramePose` of that model frame at configuration ``q``."""
-        provider = self.planner.provider
-        names = provider.frame_names()
+        """name -> :class:`FramePose` of that URDF frame at the URDF configuration ``q``."""
+        names = self.urdf_provider.frame_names()
 
         def frames(name: str) -> FramePose:
             if name not in names:
                 raise UnknownName("frame", name, names)
-            pose = provider.icub.frame_pose(q, name)
+            pose = self.urdf.frame_pose(q, name)
             return FramePose(pose.rotation.copy(), pose.translation.copy())
 
         return frames
@@ -259,7 +273,7 @@ class PmpPlannerNode(Node):
     def _on_obstacles(self, msg: Obstacles) -> None:
         """The /pmp/obstacles scene: kept if valid (checked with every frame at the rest
         posture), else dropped with a throttled warning."""
-        q = self.planner.start_configuration(self.planner.spec.posture("rest"))
+        q = self._urdf_q(self.planner.start_configuration(self.planner.spec.posture("rest")))
         try:
             parse_obstacles("/pmp/obstacles", msg.obstacles, self._frame_lookup(q), 0.0,
                             self.params.get(ReachRequestConfig))

@@ -1,0 +1,336 @@
+"""Benchmark of the learned body schema (body network + PMP on its Jacobian) and of the learned
+eye-hand map against geometric triangulation.
+
+    scripts/env.sh python bench/body_schema.py --quick          # < 2 min, pinocchio FK babbles
+    scripts/env.sh python bench/body_schema.py                  # 10k babbles, curves
+    scripts/env.sh python bench/body_schema.py --dataset data/body_schema/babble_right_X.npz
+                                                                # + rates of a ROS babbling run
+    scripts/env.sh python bench/body_schema.py --quick --plot   # + PNGs in bench/out/
+
+Data: babbles of the right arm (7 joints uniform within the URDF limits, torso and left arm at
+rest) with the hand (``r_hand_dh_frame``) from pinocchio forward kinematics, held-out test set
+from another seed. A ROS babbling dataset (``icub babble``) given with ``--dataset`` adds its
+measured rates (``babble_samples_per_s`` per wall second, ``_sim`` per simulated second),
+``visible_fraction`` and the triangulation error of its samples; without one these keys are
+null (the quick run does not start the graph).
+
+- Body network (eqs 1-2 of the body-schema paper): trained by Levenberg-Marquardt
+  (scipy ``least_squares`` trf + LSMR on the analytic Jacobian) within a time budget;
+  ``body_rmse_mm`` on the held-out set; ``jacobian_err_rel`` median of
+  ||J_learned - J_pinocchio||_F / ||J_pinocchio||_F at held-out postures.
+- PMP: the same reachable targets (FK of held-out postures) planned from rest with the learned
+  provider and with the analytic one (right arm, no torso); the error is the URDF hand at the
+  planned final posture vs the target; success = within 5 mm.
+- Eye-hand map (force paper eq 12): 7-50-3 on stereo samples of hands in view (the cameras of
+  the simulator's eye kinematics, head at rest, random eye angles, 0.3 px pixel noise), trained
+  and tested on the cameras as they are; triangulation assumes the nominal cameras. Nominal:
+  the real cameras are nominal. Perturbed: principal points shifted (+3, -2) px and (-2, +3) px,
+  left camera rotated 1 deg about its y axis. Errors in the head-centred frame (``head``).
+- Adaptation (tool): the marker moves 12 cm along the hand frame's x axis; the model keeps
+  training on growing numbers of new babbles; ``adapt_samples`` is the fewest that bring the
+  held-out error back within 1.25x the error before the change.
+Ends with one JSON line. Paper figures are printed beside ours.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from icub_pmp.body_schema import (  # noqa: E402
+    BodyNetwork,
+    EyeHandMap,
+    LearnedJacobianProvider,
+    LmTrainer,
+    LmTrainerConfig,
+    load_dataset,
+)
+from icub_pmp.errors import InvalidInput  # noqa: E402
+from icub_pmp.gaze.gaze_controller import GazeController  # noqa: E402
+from icub_pmp.kinematics import IcubModel, RobotSpec  # noqa: E402
+from icub_pmp.kinematics.eye_kinematics import (  # noqa: E402
+    CameraIntrinsics,
+    EyeKinematics,
+    project_point,
+)
+from icub_pmp.peripersonal import analytic_babbling  # noqa: E402
+from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal  # noqa: E402
+from icub_pmp.pmp.pinocchio_provider import PinocchioJacobianProvider  # noqa: E402
+from icub_pmp.vision.stereo_triangulator import StereoTriangulator  # noqa: E402
+
+OUT = Path(__file__).resolve().parent / "out"
+SUCCESS = 5e-3  # [m]
+PAPER = {"body_rmse_mm": "0.04 (6-DoF industrial arm, seed 002)",
+         "eyehand_err_mm_mean": "0.31 (x, y; force paper Sect. 4)",
+         "eyehand_err_mm_std": "5.5 x/y, about 11 z"}
+
+
+def tool_hand(provider, q_arm, idx, frame, offset) -> np.ndarray:
+    """Marker positions (n, 3): the hand frame's origin + R @ offset at each arm posture."""
+    q = provider.icub.posture("rest")
+    out = np.empty((len(q_arm), 3))
+    for k, qa in enumerate(q_arm):
+        q[idx] = qa
+        kin = provider.kinematics(q, [frame])
+        out[k] = kin.positions[0] + kin.rotations[0] @ offset
+    return out
+
+
+def jacobian_error(net, provider, q_arm, idx) -> float:
+    """Median relative Frobenius error of the learned Jacobian vs pinocchio's."""
+    q = provider.icub.posture("rest")
+    pred = net.jacobian(q_arm)
+    rel = []
+    for k, qa in enumerate(q_arm):
+        q[idx] = qa
+        j = provider.kinematics(q, [net.frame]).jacobians[0, :3][:, idx]
+        rel.append(np.linalg.norm(pred.jacobians[k] - j) / np.linalg.norm(j))
+    return float(np.median(rel))
+
+
+def pmp_errors(planner: PmpPlanner, truth, targets, frame) -> np.ndarray:
+    """True hand errors [m] of PMP plans (right arm, from rest) toward ``targets``."""
+    rest = planner.start_configuration(None)
+    names = planner.provider.joint_names
+    out = []
+    for t in targets:
+        plan = planner.plan(ReachGoal(targets={"right": t}, use_torso=False), rest)
+        q = truth.icub.q_from_dict(dict(zip(names, plan.q_final)))
+        out.append(np.linalg.norm(truth.positions(q, [frame])[0] - t))
+    return np.array(out)
+
+
+def stereo_set(n: int, seed: int, eyes: EyeKinematics, T_root_head: np.ndarray,
+               hands: np.ndarray, cams: dict, rot_left: np.ndarray, noise: float, gaze,
+               q_head: np.ndarray):
+    """Stereo samples of the hand positions ``hands`` seen by the real cameras ``cams``
+    (intrinsics per side, left extrinsic rotation ``rot_left``), the eyes fixating each hand
+    (the gaze controller's closed-form eyes, head at ``q_head``) up to a random 0.03 rad:
+    inputs (n, 7), hands (n, 3) root_link, the nominal camera poses (n, 2, 4, 4)."""
+    rng = np.random.default_rng(seed)
+    x, p, poses = [], [], []
+    k = 0
+    while len(x) < n:
+        if k > 50 * n:
+            raise InvalidInput(f"stereo_set: only {len(x)} of {n} hands in view of both cameras")
+        h = hands[k % len(hands)]
+        k += 1
+        if h[0] > -0.1:  # behind the eyes' reach of view: not a sample
+            continue
+        try:
+            (tilt, version, verg), _ = gaze.eyes_for(q_head, h)
+        except InvalidInput:
+            continue
+        tilt, version = tilt + rng.normal(0, 0.03), version + rng.normal(0, 0.03)
+        try:
+            Tn = {s: eyes.T_root_camera(T_root_head, s, tilt, version, verg)
+                  for s in ("left", "right")}
+        except InvalidInput:
+            continue
+        Tr = dict(Tn)
+        Tr["left"] = Tn["left"].copy()
+        Tr["left"][:3, :3] = Tn["left"][:3, :3] @ rot_left
+        try:
+            uv = [project_point(Tr[s], h, cams[s]) + rng.normal(0, noise, 2)
+                  for s in ("left", "right")]
+        except InvalidInput:
+            continue
+        if not all(0 <= u[0] < 320 and 0 <= u[1] < 240 for u in uv):
+            continue
+        x.append(np.r_[uv[0], uv[1], tilt, version, verg])
+        p.append(h)
+        poses.append([Tn["left"], Tn["right"]])
+    return np.array(x), np.array(p), np.array(poses)
+
+
+def eye_hand_vs_triangulation(hands_train, hands_test, perturbed: bool, evals: int,
+                              model: IcubModel) -> dict:
+    """Errors [mm] (mean, std per axis, head frame) of the learned map and of triangulation."""
+    eyes = EyeKinematics.from_model(model)
+    T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
+    nominal = CameraIntrinsics()
+    if perturbed:
+        cams = {"left": CameraIntrinsics(cx=163.0, cy=118.0),
+                "right": CameraIntrinsics(cx=158.0, cy=123.0)}
+        a = np.radians(1.0)
+        rot = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    else:
+        cams, rot = {"left": nominal, "right": nominal}, np.eye(3)
+    gaze = GazeController()
+    q_head, _ = gaze.configuration(RobotSpec.load().posture("rest"))
+    xtr, ptr, _ = stereo_set(len(hands_train), 1, eyes, T_root_head, hands_train, cams, rot, 0.3,
+                             gaze, q_head)
+    xte, pte, poses = stereo_set(len(hands_test), 2, eyes, T_root_head, hands_test, cams, rot,
+                                 0.3, gaze, q_head)
+    R, t = T_root_head[:3, :3], T_root_head[:3, 3]
+    to_head = (lambda p: (p - t) @ R)  # noqa: E731 - root_link -> head frame, (n, 3)
+    m, _ = EyeHandMap.train(xtr, to_head(ptr), "head",
+                            trainer=LmTrainer(LmTrainerConfig(max_evaluations=evals)))
+    err_map = (m.locate(xte) - to_head(pte)) * 1e3
+    tri = StereoTriangulator(nominal, nominal)
+    tri_p = np.array([tri.triangulate(tuple(x[:2]), tuple(x[2:4]), T[0], T[1]).position
+                      for x, T in zip(xte, poses)])
+    err_tri = (to_head(tri_p) - to_head(pte)) * 1e3
+    return {"eyehand_mean": np.abs(err_map.mean(axis=0)).round(2).tolist(),
+            "eyehand_std": err_map.std(axis=0).round(2).tolist(),
+            "eyehand_rmse": float(np.sqrt(np.mean(np.sum(err_map ** 2, axis=1)))),
+            "tri_mean": np.abs(err_tri.mean(axis=0)).round(2).tolist(),
+            "tri_std": err_tri.std(axis=0).round(2).tolist(),
+            "tri_rmse": float(np.sqrt(np.mean(np.sum(err_tri ** 2, axis=1))))}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="small dataset, < 2 min")
+    ap.add_argument("--dataset", default="", help="a ROS babbling dataset (.npz) to report")
+    ap.add_argument("--plot", action="store_true", help="write PNGs to bench/out/")
+    args = ap.parse_args()
+    q = args.quick
+    n_train, n_test = (3000, 500) if q else (10000, 2000)
+    budget = 30.0 if q else 60.0
+    n_pmp = 10 if q else 100
+    spec = RobotSpec.load()
+    truth = PinocchioJacobianProvider()
+    idx = truth.icub.indices(spec.right_arm_joints)
+    frame = spec.hand_frame("right")
+    train = analytic_babbling("right", n_train, seed=100, provider=truth)
+    test = analytic_babbling("right", n_test, seed=200, provider=truth)
+    trainer = LmTrainer(LmTrainerConfig(max_evaluations=100000, time_budget=budget))
+    net, report = BodyNetwork.train("right", train.joint_names, train.q, train.hand,
+                                    truth.lower[idx], truth.upper[idx], frame, trainer=trainer)
+    err = np.linalg.norm(net.position(test.q) - test.hand, axis=1)
+    body_rmse = float(np.sqrt(np.mean(err ** 2)) * 1e3)
+    jac_err = jacobian_error(net, truth, test.q[:200], idx)
+    print(f"body network 7-32-41-3: {n_train} babbles, {report.evaluations} LM evaluations in "
+          f"{report.seconds:.1f} s; held-out RMSE {body_rmse:.2f} mm (median "
+          f"{np.median(err) * 1e3:.2f}, p95 {np.percentile(err, 95) * 1e3:.2f}); paper "
+          f"{PAPER['body_rmse_mm']}", file=sys.stderr)
+
+    cfg = PmpConfig(posture_memory_size=1000 if q else 5000)
+    learned = PmpPlanner(cfg, provider=LearnedJacobianProvider([net]))
+    analytic = PmpPlanner(cfg, provider=truth)
+    targets = test.hand[-n_pmp:]
+    e_learned = pmp_errors(learned, truth, targets, frame)
+    e_analytic = pmp_errors(analytic, truth, targets, frame)
+    print(f"PMP on {n_pmp} targets: learned success {np.mean(e_learned <= SUCCESS):.2f} "
+          f"(median {np.median(e_learned) * 1e3:.1f} mm), analytic "
+          f"{np.mean(e_analytic <= SUCCESS):.2f} (median {np.median(e_analytic) * 1e3:.2f} mm)",
+          file=sys.stderr)
+
+    eh = {}
+    n_eh = (1000, 300) if q else (15000, 5000)
+    for name, pert in (("nominal", False), ("perturbed", True)):
+        eh[name] = eye_hand_vs_triangulation(train.hand[:n_eh[0]] if q else analytic_babbling(
+            "right", n_eh[0], 300, truth).hand, test.hand[:n_eh[1]] if q else analytic_babbling(
+            "right", n_eh[1], 400, truth).hand, pert, 40 if q else 300, truth.icub)
+        print(f"eye-hand {name}: map RMSE {eh[name]['eyehand_rmse']:.1f} mm vs triangulation "
+              f"{eh[name]['tri_rmse']:.1f} mm; paper {PAPER['eyehand_err_mm_mean']} mean, "
+              f"{PAPER['eyehand_err_mm_std']} std", file=sys.stderr)
+
+    # adaptation: a 12 cm tool along the hand's x axis
+    offset = np.array([0.12, 0.0, 0.0])
+    tool_test = tool_hand(truth, test.q, idx, frame, offset)
+    tool_pool = analytic_babbling("right", 1600, seed=500, provider=truth)
+    tool_train = tool_hand(truth, tool_pool.q, idx, frame, offset)
+    before = float(np.sqrt(np.mean(np.sum((net.position(test.q) - tool_test) ** 2, 1))) * 1e3)
+    goal = 1.25 * body_rmse
+    adapt = None
+    curve = {}
+    for n_new in (100, 200, 400, 800, 1600):
+        adapted, _ = BodyNetwork.train(
+            "right", train.joint_names, tool_pool.q[:n_new], tool_train[:n_new], net.lower,
+            net.upper, frame, initial=net,
+            trainer=LmTrainer(LmTrainerConfig(max_evaluations=30 if q else 80)))
+        e = float(np.sqrt(np.mean(np.sum((adapted.position(test.q) - tool_test) ** 2, 1))) * 1e3)
+        curve[n_new] = round(e, 2)
+        if e <= goal:
+            adapt = n_new
+            break
+    print(f"tool 12 cm: error {before:.0f} mm right after the change; after n new babbles "
+          f"{curve} mm (goal {goal:.1f} mm)", file=sys.stderr)
+
+    samples_curve = {}
+    if not q:
+        for n, hid in ((1000, (32, 41)), (3000, (32, 41)), (10000, (16, 16)),
+                       (10000, (64, 64))):
+            m, r = BodyNetwork.train("right", train.joint_names, train.q[:n], train.hand[:n],
+                                     net.lower, net.upper, frame, hidden=hid, trainer=trainer)
+            e = np.linalg.norm(m.position(test.q) - test.hand, axis=1)
+            rmse = float(np.sqrt(np.mean(e ** 2))) * 1e3
+            samples_curve[f"{n}x{hid[0]}-{hid[1]}"] = round(rmse, 2)
+        print(f"error vs samples x hidden sizes [mm]: {samples_curve}", file=sys.stderr)
+
+    ros = {"babble_samples_per_s": None, "babble_samples_per_s_sim": None,
+           "visible_fraction": None, "babble_triangulation_err_mm_median": None}
+    if args.dataset:
+        d = load_dataset(args.dataset)
+        m = d.meta
+        ros = {"babble_samples_per_s": round(m["samples"] / m["wall_s"], 4),
+               "babble_samples_per_s_sim": round(m["samples"] / m["sim_s"], 4),
+               "visible_fraction": round(m["samples"] / max(m["attempts"], 1), 3),
+               "babble_triangulation_err_mm_median": round(float(np.median(np.linalg.norm(
+                   d.learner["hand_seen"] - d.ground_truth, axis=1))) * 1e3, 2)}
+
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        OUT.mkdir(exist_ok=True)
+        fig = plt.figure(figsize=(5, 4))
+        ax = fig.add_subplot(projection="3d")
+        ax.scatter(*train.hand[:2000].T, s=1)
+        ax.set_title("babbled workspace, right hand [m]")
+        fig.savefig(OUT / "body_schema_workspace.png", dpi=120)
+        fig = plt.figure(figsize=(5, 3.5))
+        xs = sorted(curve)
+        plt.plot(xs, [curve[x] for x in xs], "o-")
+        plt.xlabel("new babbles with the tool")
+        plt.ylabel("held-out RMSE [mm]")
+        plt.xscale("log")
+        fig.savefig(OUT / "body_schema_adaptation.png", dpi=120, bbox_inches="tight")
+
+    out = {
+        **ros,
+        "body_rmse_mm": round(body_rmse, 2),
+        "body_train_s": round(report.seconds, 1),
+        "body_train_samples": n_train,
+        "jacobian_err_rel": round(jac_err, 3),
+        "pmp_targets": n_pmp,
+        "pmp_learned_success": round(float(np.mean(e_learned <= SUCCESS)), 3),
+        "pmp_learned_err_mm_median": round(float(np.median(e_learned)) * 1e3, 2),
+        "pmp_analytic_success": round(float(np.mean(e_analytic <= SUCCESS)), 3),
+        "pmp_analytic_err_mm_median": round(float(np.median(e_analytic)) * 1e3, 3),
+        "eyehand_err_mm_mean": eh["nominal"]["eyehand_mean"],
+        "eyehand_err_mm_std": eh["nominal"]["eyehand_std"],
+        "triangulation_err_mm_mean": eh["nominal"]["tri_mean"],
+        "triangulation_err_mm_std": eh["nominal"]["tri_std"],
+        "eyehand_err_mm_mean_perturbed": eh["perturbed"]["eyehand_mean"],
+        "eyehand_err_mm_std_perturbed": eh["perturbed"]["eyehand_std"],
+        "triangulation_err_mm_mean_perturbed": eh["perturbed"]["tri_mean"],
+        "triangulation_err_mm_std_perturbed": eh["perturbed"]["tri_std"],
+        "eyehand_rmse_mm_perturbed": round(eh["perturbed"]["eyehand_rmse"], 2),
+        "triangulation_rmse_mm_perturbed": round(eh["perturbed"]["tri_rmse"], 2),
+        "eyehand_beats_triangulation_perturbed": bool(
+            eh["perturbed"]["eyehand_rmse"] < eh["perturbed"]["tri_rmse"]),
+        "adapt_samples": adapt,
+        "adapt_curve_mm": curve,
+        "error_vs_samples_hidden_mm": samples_curve,
+        "paper": PAPER,
+    }
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()

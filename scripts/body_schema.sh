@@ -1,0 +1,3 @@
+#!/usr/bin/env bash
+# Start the body_schema node (motor babbling) with config/body_schema.yaml; extra arguments: --ros-args -p NAME:=VALUE ...
+exec "$(dirname "${BASH_SOURCE[0]}")/node.sh" body_schema "$@"
