@@ -83,8 +83,11 @@ class RealismSettings(NamedTuple):
     @property
     def active(self) -> bool:
         """Whether any imperfection is on."""
-        return any(v != 0 and (not isinstance(v, tuple) or any(v))
-                   for k, v in self._asdict().items() if k != "seed")
+        return (self.ft_active or self.friction_active or self.camera_active
+                or any((self.mass_error, self.com_error, self.actuator_delay_steps,
+                        self.actuator_bandwidth_hz, self.encoder_resolution,
+                        self.velocity_noise_std, self.imu_acc_noise_std, self.imu_acc_bias,
+                        self.imu_gyro_noise_std, self.imu_gyro_bias)))
 
     @property
     def ft_active(self) -> bool:
