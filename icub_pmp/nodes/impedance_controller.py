@@ -20,8 +20,11 @@ actions    /impedance_controller/follow_joint_trajectory (icub_interfaces/action
 Stepping: with ``lockstep`` every /joint_states message is answered at once (with
 ``wait_for_estimate``, while the simulator says on /sim/status that it runs lockstep, only
 once the estimate of the same stamp has arrived, or after ``estimate_timeout`` of wall time
-without it: every 1 kHz step then uses the estimate of its own joint state; a free-running
-simulator does not wait for anyone, so neither does the controller), so the 1 kHz loop is
+without it: every 1 kHz step then uses the estimate of its own joint state; no waiting
+before the first estimate or once the last one is older than ``estimate_timeout``, so a
+stopped estimator costs no wall time and the ``estimate_lost_timeout`` safe hold comes in
+simulated time; a free-running simulator does not wait for anyone, so neither does the
+controller), so the 1 kHz loop is
 exact in simulated time; otherwise a timer at ``rate_hz`` steps on the latest joint state.
 Trajectories start at their header stamp (0 = now, a past stamp = now) in the time of the
 joint states. Bad input (NaN, unknown joints, non-increasing times, points beyond the joint
@@ -193,7 +196,9 @@ class ImpedanceControllerNode(Node):
             self._latest_new = True
             return
         sample = (ns * 1e-9, q, v, stamp)
-        if cfg.wait_for_estimate and cfg.torque_loop and self._sim_mode == "lockstep":
+        age = self.controller.estimate_age(ns * 1e-9)
+        if (cfg.wait_for_estimate and cfg.torque_loop and self._sim_mode == "lockstep"
+                and 0.0 <= age <= cfg.estimate_timeout):  # estimates come: wait for this one
             sample = self.gate.offer(ns, sample)
             if sample is None:
                 return  # waits for its estimate
