@@ -20,7 +20,9 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
 from icub_sim_bridge.actuator_dynamics import ActuatorDynamics
+from icub_sim_bridge.camera_perturbation import CameraPerturbation, add_image_noise
 from icub_sim_bridge.joint_friction import JointFriction
 from icub_sim_bridge.model_mismatch import ModelMismatch, robot_bodies
 from icub_sim_bridge.realism_config import RealismSettings
@@ -51,6 +53,7 @@ class RobotImperfections:
         rngs = {k: np.random.default_rng(c) for k, c in
                 zip(_STREAMS, np.random.SeedSequence(s.seed).spawn(len(_STREAMS)))}
         self.camera_rng = rngs["camera"]
+        self._image_rng = np.random.default_rng(self.camera_rng.integers(2**63))
         self.mismatch: ModelMismatch | None = None
         if s.mass_error > 0 or s.com_error > 0:
             self.mismatch = ModelMismatch.draw(robot_bodies(model, root_body), s.mass_error,
@@ -72,3 +75,24 @@ class RobotImperfections:
         self.imu = ImuModel(s, rngs["imu"]) if any(
             (s.imu_acc_noise_std, s.imu_acc_bias, s.imu_gyro_noise_std, s.imu_gyro_bias)) \
             else None
+        self.cameras: dict[str, CameraPerturbation] = {}
+
+    def perturb_cameras(self, model: mujoco.MjModel, camera_ids: dict[str, int],
+                        nominal: CameraIntrinsics) -> None:
+        """Draw and apply each camera's calibration error ({side: MuJoCo camera id})."""
+        s = self.settings
+        if not any((s.camera_focal_error, s.camera_principal_error,
+                    s.camera_rotation_error_deg)):
+            return
+        for side, cid in sorted(camera_ids.items()):
+            p = CameraPerturbation.draw(s.camera_focal_error, s.camera_principal_error,
+                                        s.camera_rotation_error_deg, self.camera_rng)
+            p.apply(model, cid, nominal)
+            self.cameras[side] = p
+
+    def noisy_image(self, image: np.ndarray) -> np.ndarray:
+        """``image`` with the camera pixel noise (unchanged when it is 0); call from one
+        thread (the camera worker)."""
+        if self.settings.camera_noise_std <= 0:
+            return image
+        return add_image_noise(image, self.settings.camera_noise_std, self._image_rng)

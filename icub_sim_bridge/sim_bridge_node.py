@@ -259,7 +259,10 @@ class SimBridge(Node):
 
     def _publish_images(self, t: float, images: dict[str, np.ndarray]) -> None:
         ns = int(round(t * 1e9))
+        imp = self.sim.imperfections
         for side, img in images.items():
+            if imp is not None:  # realism: pixel noise (camera_info stays nominal)
+                img = imp.noisy_image(img)
             msg = Image()
             _set_stamp(msg.header.stamp, ns)
             msg.header.frame_id = self._info[side].header.frame_id

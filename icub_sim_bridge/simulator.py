@@ -74,7 +74,7 @@ import numpy as np
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.name_index import name_indices
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_sim_bridge.model_builder import OBJECT_NAMES, BuiltModel, ModelBuilder
+from icub_sim_bridge.model_builder import EYE_CAMERAS, OBJECT_NAMES, BuiltModel, ModelBuilder
 from icub_sim_bridge.realism_config import RealismConfig
 from icub_sim_bridge.robot_imperfections import RobotImperfections
 from icub_sim_bridge.sim_config import SimConfig
@@ -281,6 +281,9 @@ class Simulator:
                 np.r_[self._dadr, [m.jnt_dofadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, j)]
                                    for j in ("l_eye_pan", "r_eye_pan")]].astype(int),
                 self.n, len(FT_SENSORS), m.opt.timestep)
+            self.imperfections.perturb_cameras(
+                m, {side: self._id(mujoco.mjtObj.mjOBJ_CAMERA, cam)
+                    for side, cam in EYE_CAMERAS.items()}, self.built.camera)
             self.data = mujoco.MjData(m)  # the perturbed model's constants
         self.reset(self.config.initial_posture)
 

@@ -179,3 +179,31 @@ def test_realism_parameters_are_realism_dot_names():
     assert "realism.preset" in cfg.to_dict()
     with pytest.raises(ConfigError, match="realism.nois"):
         RealismConfig.from_dict({"realism.nois": 1.0})
+
+
+def test_cameras_see_through_the_perturbed_calibration():
+    """With a principal-point error only, the rendered image is the nominal one shifted by
+    that error (phase correlation, within 0.5 px); with pixel noise the images get its std;
+    the nominal intrinsics (what camera_info publishes) are unchanged."""
+    import cv2
+
+    from icub_sim_bridge.camera_renderer import CameraRenderer
+
+    zero = dict(camera_focal_error=0.0, camera_rotation_error_deg=0.0, camera_noise_std=0.0)
+    ideal = Simulator(SimConfig())
+    shifted = _sim(camera_principal_error=6.0, **zero)
+    imgs = []
+    for s in (ideal, shifted):
+        r = CameraRenderer(s.model, s.built.camera, threaded=False)
+        imgs.append(r.render(s.data)["left"])
+        r.close()
+    d = shifted.imperfections.cameras["left"].principal_shift
+    assert np.abs(d).max() > 1.0  # a shift worth measuring
+    grey = [cv2.cvtColor(i, cv2.COLOR_RGB2GRAY).astype(np.float64) for i in imgs]
+    (dx, dy), _ = cv2.phaseCorrelate(grey[0], grey[1])
+    assert abs(dx - d[0]) < 0.5 and abs(dy - d[1]) < 0.5, ((dx, dy), d)
+    assert shifted.built.camera == ideal.built.camera
+    noisy = _sim(**{**zero, "camera_noise_std": 2.0})
+    out = noisy.imperfections.noisy_image(imgs[0])
+    diff = out.astype(float) - imgs[0]
+    assert abs(diff[(imgs[0] > 10) & (imgs[0] < 245)].std() - 2.0) < 0.2
