@@ -86,6 +86,9 @@ class WrenchEstimator:
             self.nq, rate, cfg.velocity_cutoff_hz, cfg.acceleration_cutoff_hz
         )
         self._ft_filter = {h: ButterworthLowPass(6, cfg.ft_cutoff_hz, rate) for h in HANDS}
+        # the model's sensor wrench through the same low-pass: measured and predicted wrenches
+        # then have the same lag (a filter on the measurement alone is an error in motion)
+        self._model_filter = {h: ButterworthLowPass(6, cfg.ft_cutoff_hz, rate) for h in HANDS}
         self._imu_filter = ButterworthLowPass(3, cfg.imu_cutoff_hz, rate)
         self._contact = {
             h: ContactDetector(cfg.contact_force_on, cfg.contact_force_off,
@@ -150,7 +153,7 @@ class WrenchEstimator:
         afresh at its own time. The FT offsets (a property of the sensors) and the learnt RFRR
         stay."""
         self._filter.reset()
-        for f in self._ft_filter.values():
+        for f in list(self._ft_filter.values()) + list(self._model_filter.values()):
             f.reset()
         self._imu_filter.reset()
         for c in self._contact.values():
@@ -268,6 +271,8 @@ class WrenchEstimator:
         # eqs 8-10: the internal wrench through each sensor (model; parent on child), and the
         # forward kinematics for eq 2
         free = self.model.free_sensor_wrenches(state.q, state.v, state.a)
+        if cfg.ft_cutoff_hz > 0:
+            free = {h: self._model_filter[h](free[h]) for h in HANDS}
         self._samples += 1
 
         # predicted internal wrench p in the sensor's convention: model (+ learnt residual)

@@ -21,7 +21,9 @@ Stepping: with ``lockstep`` every /joint_states message is answered at once (wit
 ``wait_for_estimate``, while the simulator says on /sim/status that it runs lockstep, only
 once the estimate of the same stamp has arrived, or after ``estimate_timeout`` of wall time
 without it: every 1 kHz step then uses the estimate of its own joint state; no waiting
-before the first estimate or once the last one is older than ``estimate_timeout``, so a
+before the first estimate, when the estimator runs on one sample in N > 1 (the gap between
+estimates is larger than between joint states) or once the last one is older than
+``estimate_timeout``, so a
 stopped estimator costs no wall time and the ``estimate_lost_timeout`` safe hold comes in
 simulated time; a free-running simulator does not wait for anyone, so neither does the
 controller), so the 1 kHz loop is
@@ -127,6 +129,10 @@ class ImpedanceControllerNode(Node):
                                  self._on_velocity, _TRAJ_QOS)
         self.create_service(Trigger, "/impedance_controller/hold", self._on_hold)
         self._sim_mode = ""  # the simulator's stepping mode (/sim/status), "" = none seen
+        # stamps [ns]: the last estimate and joint state, and the gaps before them (an
+        # estimator on one sample in N leaves N - 1 joint states without their own estimate)
+        self._est_ns = self._js_ns = -(2**62)
+        self._est_gap_ns = self._js_gap_ns = 2**62
         self.create_subscription(SimStatus, "/sim/status", self._on_sim_status, LATCHED_QOS)
         self.pub_status = self.create_publisher(ControllerStatus, "/impedance_controller/status",
                                                 LATCHED_QOS)
@@ -196,9 +202,12 @@ class ImpedanceControllerNode(Node):
             self._latest_new = True
             return
         sample = (ns * 1e-9, q, v, stamp)
+        if ns > self._js_ns:
+            self._js_gap_ns, self._js_ns = ns - self._js_ns, ns
         age = self.controller.estimate_age(ns * 1e-9)
         if (cfg.wait_for_estimate and cfg.torque_loop and self._sim_mode == "lockstep"
-                and 0.0 <= age <= cfg.estimate_timeout):  # estimates come: wait for this one
+                and 0.0 <= age <= cfg.estimate_timeout  # estimates come
+                and 2 * self._est_gap_ns <= 3 * self._js_gap_ns):  # one per joint state
             sample = self.gate.offer(ns, sample)
             if sample is None:
                 return  # waits for its estimate
@@ -229,6 +238,8 @@ class ImpedanceControllerNode(Node):
         except IcubPmpError as exc:
             self._warn("estimate", f"/estimated_joint_torques dropped: {exc}")
             return
+        if ns > self._est_ns:
+            self._est_gap_ns, self._est_ns = ns - self._est_ns, ns
         sample = self.gate.estimate(ns)
         if sample is not None:
             self._step(*sample)
