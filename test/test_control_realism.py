@@ -8,6 +8,7 @@ import numpy as np
 from icub_pmp.control import ImpedanceController
 from icub_pmp.control.friction_compensation import FrictionCompensation
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
+from icub_pmp.kinematics.robot_spec import RobotSpec
 from icub_sim_bridge import RealismConfig, SimConfig, Simulator
 from icub_sim_bridge.harness.sim_loop import SimLoop
 from icub_sim_bridge.harness.sim_scenarios import track_min_jerk
@@ -29,7 +30,8 @@ def test_controller_adds_the_friction_of_the_setpoint_velocity():
     for on in (False, True):
         c = ImpedanceController(ImpedanceControllerConfig(
             mode="position", torque_loop=False, friction_compensation=on))
-        q, v = np.zeros(c.n), np.zeros(c.n)
+        rest = RobotSpec.load().posture("rest")  # within the joint limits
+        q, v = np.array([rest.get(n, 0.0) for n in c.joint_names]), np.zeros(c.n)
         c.step(0.0, q, v)
         c.set_velocity_command(["r_elbow"], [0.2], 0.0)
         out[on] = c.step(0.001, q, v)
