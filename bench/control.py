@@ -20,9 +20,19 @@ compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
    1 kHz sample, ``lockstep_rtf_estimator_100hz`` with it on one sample in 10 (the rate of
    wholeBodyDynamics on the robot), ``lockstep_rtf_no_estimator`` without it (baseline).
 
+4. Realism (issue 17), both simulator presets in the same run, nested under ``ideal`` /
+   ``icub``: the tracking of 2 (with friction compensation on, for both) and, over DDS,
+   ``lockstep_rtf`` with the estimator on every 1 kHz sample on the critical path
+   (``wait_for_estimate``, the shipped default, acts in lockstep: each controller step waits
+   for the estimate of its own joint state), ``stale_estimate_steps`` (controller steps with
+   the torque loop on and no fresh estimate, from /impedance_controller/status; goal 0) and
+   ``controller_steps``; for ``icub``, then the estimator is killed:
+   ``estimator_stop_safe_hold_s`` (simulated) and ``_wall_s`` until the status says
+   safe_hold, and its reason.
+
 The machine is shared: wall-clock figures depend on its load (printed at start and end).
 Ends with one JSON line: lockstep_rtf (DDS), controller_us_median, tracking_rms_deg,
-tracking_final_deg, and the in-process figures.
+tracking_final_deg, and the in-process figures (all ``ideal``), then ``ideal`` / ``icub``.
 """
 
 from __future__ import annotations
@@ -44,6 +54,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig  # noqa: E402
 from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
 from icub_sim_bridge.harness.sim_scenarios import track_min_jerk  # noqa: E402
+from icub_sim_bridge.realism_config import RealismConfig  # noqa: E402
 from icub_sim_bridge.sim_config import SimConfig  # noqa: E402
 from icub_sim_bridge.simulator import Simulator  # noqa: E402
 
@@ -91,10 +102,11 @@ def cpu_time_per_step(loop: SimLoop, n: int = 2000) -> float:
     return (time.thread_time_ns() - t0) / n / 1e3
 
 
-def bench_tracking(sim: Simulator) -> dict:
+def bench_tracking(sim: Simulator, friction_compensation: bool = False) -> dict:
     """2 s minimum-jerk joint move in position mode (the test's trajectory)."""
     sim.reset("rest")
-    loop = SimLoop(ImpedanceControllerConfig(mode="position", feedforward="inverse_dynamics"),
+    loop = SimLoop(ImpedanceControllerConfig(mode="position", feedforward="inverse_dynamics",
+                                             friction_compensation=friction_compensation),
                    sim=sim)
     loop.run(0.05)
     r = track_min_jerk(loop)
@@ -106,16 +118,21 @@ def bench_tracking(sim: Simulator) -> dict:
     }
 
 
-def bench_dds(window: float, sample_every: int | None) -> dict:
+def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
+              stop_estimator: bool = False) -> dict:
     """Lockstep real-time factor of sim_bridge + wrench_estimator (one joint-state sample in
-    ``sample_every``; None = no estimator) + impedance_controller."""
+    ``sample_every``; None = no estimator) + impedance_controller, on the realism ``preset``;
+    the controller's stale-estimate count; with ``stop_estimator``, the time to the safe hold
+    once the estimator is killed."""
     from rosgraph_msgs.msg import Clock
 
+    from icub_interfaces.msg import ControllerStatus
+    from icub_pmp.ros.qos import LATCHED_QOS
     from icub_pmp.testing import NodeGraph, RosProbe, reserve_domain_id, ros_environment
 
     params = {
         "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10,
-                       "ground_truth_decimation": 10},
+                       "ground_truth_decimation": 10, "realism.preset": preset},
         "wrench_estimator": {"publish_every": 10,
                              "sample_every": sample_every or 1},
         "impedance_controller": {"use_sim_time": True},
@@ -136,14 +153,37 @@ def bench_dds(window: float, sample_every: int | None) -> dict:
                     c = probe.collect("/clock", Clock, 1, 30.0)[0]
                     return c.clock.sec + c.clock.nanosec * 1e-9
 
+                def status() -> ControllerStatus:
+                    return probe.collect("/impedance_controller/status", ControllerStatus, 1,
+                                         30.0, qos=LATCHED_QOS)[0]
+
                 time.sleep(2.0)  # warm-up
+                st0 = status()
                 s0, w0 = sim_t(), time.perf_counter()
                 time.sleep(window)
                 s1, w1 = sim_t(), time.perf_counter()
+                st1 = status()
                 timeouts = g.procs["sim_bridge"].output().count("lockstep: no /effort_command")
+                out = {"rtf": (s1 - s0) / (w1 - w0), "window_s": w1 - w0,
+                       "timeouts": timeouts,
+                       "stale_estimate_steps": int(st1.stale_estimate_steps
+                                                   - st0.stale_estimate_steps),
+                       "controller_steps": int(st1.steps - st0.steps)}
+                if stop_estimator:
+                    t_kill, w_kill = sim_t(), time.perf_counter()
+                    g.kill("wrench_estimator")
+                    st = status()
+                    while st.status != "safe_hold" and time.perf_counter() - w_kill < 60.0:
+                        time.sleep(0.05)
+                        st = status()
+                    out["estimator_stop_safe_hold_s"] = (
+                        st.header.stamp.sec + st.header.stamp.nanosec * 1e-9 - t_kill
+                        if st.status == "safe_hold" else -1.0)
+                    out["estimator_stop_safe_hold_wall_s"] = time.perf_counter() - w_kill
+                    out["estimator_stop_reason"] = st.safe_hold_reason
             finally:
                 probe.close()
-    return {"rtf": (s1 - s0) / (w1 - w0), "window_s": w1 - w0, "timeouts": timeouts}
+    return out
 
 
 def main() -> None:
@@ -161,15 +201,37 @@ def main() -> None:
     out.update(bench_tracking(sim))
     print(f"tracking: rms {out['tracking_rms_deg']:.4f} deg, final "
           f"{out['tracking_final_deg']:.4f} deg", file=sys.stderr)
+    dds: dict = {}
     for key, every in (("lockstep_rtf", 1), ("lockstep_rtf_estimator_100hz", 10),
                        ("lockstep_rtf_no_estimator", None)):
         r = bench_dds(window, every)
+        dds[key] = dict(r)
         out[key] = r["rtf"]
         out[f"{key}_timeouts"] = r["timeouts"]
         print(f"{key}: {r}", file=sys.stderr)
+    for preset in ("ideal", "icub"):
+        psim = Simulator(SimConfig(cameras_enabled=False),
+                         realism=RealismConfig(preset=preset))
+        fig = {k: v for k, v in bench_tracking(psim, friction_compensation=True).items()
+               if k != "tracking_max_deg"}
+        del psim
+        # ideal: the run above (estimator on every sample) is that figure
+        r = dict(dds["lockstep_rtf"]) if preset == "ideal" else bench_dds(
+            window, 1, preset, stop_estimator=True)
+        fig["lockstep_rtf"] = r.pop("rtf")
+        fig.update({k: v for k, v in r.items() if k != "window_s"})
+        out[preset] = fig
+        print(f"{preset}: {fig}", file=sys.stderr)
     out["load_start"] = load0
     out["load_end"] = _load()
-    print(json.dumps({k: (round(v, 4) if isinstance(v, float) else v) for k, v in out.items()}))
+    print(json.dumps(_rounded(out)))
+
+
+def _rounded(v):
+    """Floats rounded to 4 decimals, through nested dicts."""
+    if isinstance(v, dict):
+        return {k: _rounded(x) for k, x in v.items()}
+    return round(v, 4) if isinstance(v, float) else v
 
 
 if __name__ == "__main__":

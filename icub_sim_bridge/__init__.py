@@ -9,7 +9,8 @@ rendered sequences of the tests and benchmarks. The simulator uses the robot des
 - :class:`Simulator`: step, effort commands, joint state, FT, IMU, ground-truth wrenches,
   objects, scripted wrenches
 - :class:`CameraRenderer`: the two eye cameras (offscreen, optionally on a worker thread)
-- :class:`SimConfig`: the parameters (``config/sim_bridge.yaml``)
+- :class:`SimConfig`: the parameters (``config/sim_bridge.yaml``); :class:`RealismConfig`:
+  the ``realism.*`` ones (the real robot's imperfections, ``ideal`` | ``icub`` preset)
 - :class:`~icub_sim_bridge.command_watchdog.CommandWatchdog`: hold the robot when the
   controller stops answering; :class:`~icub_sim_bridge.lockstep_gate.LockstepGate`,
   :class:`~icub_sim_bridge.step_pacer.StepPacer`: the node's stepping
@@ -17,6 +18,7 @@ rendered sequences of the tests and benchmarks. The simulator uses the robot des
 
 from icub_sim_bridge.camera_renderer import CameraRenderer
 from icub_sim_bridge.model_builder import BuiltModel, ModelBuilder
+from icub_sim_bridge.realism_config import RealismConfig
 from icub_sim_bridge.sim_config import SimConfig
 from icub_sim_bridge.simulator import FT_SENSORS, FT_SIGN_CONVENTION, Simulator
 
@@ -26,6 +28,7 @@ __all__ = [
     "FT_SENSORS",
     "FT_SIGN_CONVENTION",
     "ModelBuilder",
+    "RealismConfig",
     "SimConfig",
     "Simulator",
 ]

@@ -86,6 +86,7 @@ from icub_pmp.ros.raw_messages import (
 from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
 from icub_sim_bridge.command_watchdog import CommandWatchdog
 from icub_sim_bridge.lockstep_gate import LockstepGate
+from icub_sim_bridge.realism_config import RealismConfig
 from icub_sim_bridge.simulator import FT_SENSORS
 from icub_sim_bridge.step_pacer import StepPacer
 
@@ -134,9 +135,11 @@ class SimBridge(Node):
     def __init__(self) -> None:
         super().__init__("sim_bridge")
         self.params = ConfigParameters(
-            self, SimConfig, read_only=set(SimConfig.field_names()) - _RUNTIME_PARAMS,
+            self, (SimConfig, RealismConfig),
+            read_only=(set(SimConfig.field_names()) - _RUNTIME_PARAMS)
+            | set(RealismConfig.field_names()),
             reject=_keep_wall_time, on_change=self._on_config_change)
-        self.sim = Simulator(self.config)
+        self.sim = Simulator(self.config, realism=self.params.get(RealismConfig))
         self._names = list(self.sim.joint_names)
         self._valid_names = frozenset(self._names)
         # --- publishers
@@ -208,18 +211,19 @@ class SimBridge(Node):
         self.get_logger().info(
             f"sim_bridge: {len(self._names)} actuated joints, mode {self.config.mode}, "
             f"real_time_factor {self.config.real_time_factor}, cameras "
-            f"{'on' if self.cameras else 'off'}, FT sign convention child_to_parent")
+            f"{'on' if self.cameras else 'off'}, FT sign convention child_to_parent, realism "
+            f"preset {self.params.get(RealismConfig).preset!r} (seed "
+            f"{self.params.get(RealismConfig).seed})")
 
     # ------------------------------------------------------------------ parameters
     @property
     def config(self) -> SimConfig:
         """The current configuration (``config/sim_bridge.yaml``, run-time changes)."""
-        return self.params.config
+        return self.params.get(SimConfig)
 
-    def _on_config_change(self, old: SimConfig, new: SimConfig, changed: frozenset[str]
-                          ) -> None:
+    def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
         if "start_paused" in changed:
-            self._set_paused(new.start_paused, "start_paused parameter")
+            self._set_paused(new[0].start_paused, "start_paused parameter")
 
     def _set_paused(self, paused: bool, why: str) -> None:
         if paused != self.paused:
@@ -255,7 +259,10 @@ class SimBridge(Node):
 
     def _publish_images(self, t: float, images: dict[str, np.ndarray]) -> None:
         ns = int(round(t * 1e9))
+        imp = self.sim.imperfections
         for side, img in images.items():
+            if imp is not None:  # realism: pixel noise (camera_info stays nominal)
+                img = imp.noisy_image(img)
             msg = Image()
             _set_stamp(msg.header.stamp, ns)
             msg.header.frame_id = self._info[side].header.frame_id

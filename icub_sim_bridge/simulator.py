@@ -48,6 +48,15 @@ limits) is restored at rest, every scripted wrench is cleared, every joint goes 
 restored posture (as after :meth:`reset`) and time goes on from where it was: simulated time
 never goes back. :attr:`last_divergence` and :attr:`divergences` tell what happened.
 
+Realism (``realism`` argument, :class:`RealismConfig`; ``ideal`` by default): with the
+``icub`` preset the simulator steps a copy of the model whose masses, centres of mass and
+inertias differ from the URDF's, with joint friction and a delayed actuation, and the sensor
+methods (:meth:`joint_state`, :meth:`ft`, :meth:`ft_all`, :meth:`imu`) give what the real
+sensors give: quantised encoders, FT noise + offset + drift + bandwidth, IMU noise + bias
+(:class:`~icub_sim_bridge.robot_imperfections.RobotImperfections`). The true values stay
+available for evaluation: :meth:`true_joint_state`, :meth:`true_ft_all`. With ``ideal`` the
+code path is the one without imperfections.
+
 Missing commands: :meth:`hold` puts every joint on hold at its current posture (what the
 simulator does when the controller stops answering); the next command hands the joints it
 names back to the commanded torque.
@@ -55,6 +64,7 @@ names back to the commanded torque.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from typing import Iterable, NamedTuple, Sequence
 
@@ -64,7 +74,9 @@ import numpy as np
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.name_index import name_indices
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_sim_bridge.model_builder import OBJECT_NAMES, BuiltModel, ModelBuilder
+from icub_sim_bridge.model_builder import EYE_CAMERAS, OBJECT_NAMES, BuiltModel, ModelBuilder
+from icub_sim_bridge.realism_config import RealismConfig
+from icub_sim_bridge.robot_imperfections import RobotImperfections
 from icub_sim_bridge.sim_config import SimConfig
 
 __all__ = ["Simulator", "JointState", "Wrench", "Pose", "ImuReading", "SelfContact",
@@ -162,11 +174,15 @@ class Simulator:
     """The simulated iCub (see module doc)."""
 
     def __init__(self, config: SimConfig | None = None, spec: RobotSpec | None = None,
-                 built: BuiltModel | None = None):
+                 built: BuiltModel | None = None, realism: RealismConfig | None = None):
         self.config = config or SimConfig()
         self.spec = spec or RobotSpec.load()
         self.built = built or ModelBuilder(self.config, self.spec).build()
-        m = self.model = self.built.model
+        self.realism = realism or RealismConfig()
+        settings = self.realism.resolved()
+        # imperfections change the model: the simulator's own copy (a shared BuiltModel stays
+        # the URDF's)
+        m = self.model = copy.copy(self.built.model) if settings.active else self.built.model
         # no auto-reset: MuJoCo would rewind time to 0 and put the robot at the zero posture
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
         self.data = mujoco.MjData(m)
@@ -256,6 +272,19 @@ class Simulator:
         self.last_divergence: Divergence | None = None
         floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
         self.floor_height = float(m.geom_pos[floor][2]) if floor >= 0 else -np.inf
+        self.imperfections: RobotImperfections | None = None
+        self._ft_measured: np.ndarray | None = None
+        if settings.active:
+            self.imperfections = RobotImperfections(
+                settings, m, self.spec.root_frame,
+                [self.joint_names[i] for i in self._jidx] + ["l_eye_pan", "r_eye_pan"],
+                np.r_[self._dadr, [m.jnt_dofadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, j)]
+                                   for j in ("l_eye_pan", "r_eye_pan")]].astype(int),
+                self.n, len(FT_SENSORS), m.opt.timestep)
+            self.imperfections.perturb_cameras(
+                m, {side: self._id(mujoco.mjtObj.mjOBJ_CAMERA, cam)
+                    for side, cam in EYE_CAMERAS.items()}, self.built.camera)
+            self.data = mujoco.MjData(m)  # the perturbed model's constants
         self.reset(self.config.initial_posture)
 
     # ------------------------------------------------------------------ names
@@ -315,7 +344,17 @@ class Simulator:
             d.qpos[m.jnt_qposadr[self._id(mujoco.mjtObj.mjOBJ_JOINT, name)]] = val
 
     def joint_state(self) -> JointState:
-        """Positions, velocities and applied torques of ``joint_names`` (copies)."""
+        """Positions, velocities and applied torques of ``joint_names`` as the encoders
+        measure them (copies; the true ones without realism imperfections)."""
+        st = self.true_joint_state()
+        enc = self.imperfections.encoders if self.imperfections else None
+        if enc is None:
+            return st
+        return JointState(st.time, enc.position(st.position), enc.velocity(st.velocity),
+                          st.effort)
+
+    def true_joint_state(self) -> JointState:
+        """True positions, velocities and applied torques of ``joint_names`` (copies)."""
         d = self.data
         q = np.empty(self.n)
         v = np.empty(self.n)
@@ -373,7 +412,7 @@ class Simulator:
         newly = self._commanded.copy()
         if not newly.any():
             return
-        q = np.clip(self.joint_state().position, self.lower, self.upper)
+        q = np.clip(self.true_joint_state().position, self.lower, self.upper)
         self._q_hold[newly] = q[newly]
         self._tau_cmd[:] = 0.0
         self._commanded[:] = False
@@ -408,6 +447,9 @@ class Simulator:
         self._grav_dof = self._dof_of[grav]
         self._grav_kp = self._kp[grav]
         self.data.ctrl[self._act[self._commanded]] = self._tau_cmd[self._commanded]
+        imp = getattr(self, "imperfections", None)
+        if imp is not None and imp.actuators is not None:
+            imp.actuators.reset(self._tau_cmd)
 
     def _update_hold(self) -> None:
         d = self.data
@@ -419,17 +461,31 @@ class Simulator:
     def step(self, n: int = 1) -> None:
         """Advance ``n`` physics steps with the current commands and applied wrenches."""
         m, d = self.model, self.data
+        imp = self.imperfections
         for _ in range(n):
             self._update_hold()
             if self._applied or self._xfrc_dirty:
                 self._update_applied()
+            if imp is not None:
+                self._before_step(imp)
             mujoco.mj_step(m, d)
             self.steps += 1
+            if imp is not None and imp.ft is not None:
+                self._ft_measured = imp.ft.measure(d.time, self.true_ft_all())
             v = d.qvel
             if not v @ v < self._vmax2:  # cheap pre-check (NaN fails it too)
                 self._check_speed()
             elif self.steps % _SNAPSHOT_EVERY == 0:
                 self._keep_good_state()
+
+    def _before_step(self, imp: RobotImperfections) -> None:
+        """Friction at the current speeds; the delayed/lagged torque of commanded joints."""
+        if imp.friction is not None:
+            imp.friction.update(self.model, self.data.qvel)
+        if imp.actuators is not None:
+            applied = imp.actuators.apply(self._tau_cmd)
+            c = self._commanded
+            self.data.ctrl[self._act[c]] = applied[c]
 
     # ------------------------------------------------------------------ divergence guard
     def _check_speed(self) -> None:
@@ -466,7 +522,7 @@ class Simulator:
         mujoco.mj_forward(m, d)
         self._applied.clear()
         self._xfrc_dirty = False
-        self._q_hold = np.clip(self.joint_state().position, self.lower, self.upper)
+        self._q_hold = np.clip(self.true_joint_state().position, self.lower, self.upper)
         self._tau_cmd = np.zeros(self.n)
         self._commanded = np.zeros(self.n, dtype=bool)
         self._set_held()
@@ -492,6 +548,9 @@ class Simulator:
         """FT sensor ``name`` (``FT_SENSORS``) in its frame, child_to_parent (module doc)."""
         if name not in self._ft_adr:
             raise UnknownName("FT sensor", name, FT_SENSORS)
+        if self._ft_measured is not None:
+            w = self._ft_measured[FT_SENSORS.index(name)]
+            return Wrench(w[:3].copy(), w[3:].copy())
         fa, ta = self._ft_adr[name]
         s = self.data.sensordata
         # MuJoCo's force/torque sensors give the wrench the parent exerts on the child's
@@ -499,15 +558,25 @@ class Simulator:
         return Wrench(-s[fa:fa + 3].copy(), -s[ta:ta + 3].copy())
 
     def ft_all(self) -> np.ndarray:
-        """All FT sensors as (4, 6) [N, N m] rows (force, torque), ``FT_SENSORS`` order."""
+        """All FT sensors as (4, 6) [N, N m] rows (force, torque), ``FT_SENSORS`` order, as
+        the sensors measure them (realism: noise, offset, drift, bandwidth)."""
+        if self._ft_measured is not None:
+            return self._ft_measured.copy()
+        return self.true_ft_all()
+
+    def true_ft_all(self) -> np.ndarray:
+        """The true FT wrenches (4, 6) (:meth:`ft_all` without sensor imperfections)."""
         return -self.data.sensordata[self._ft_index].reshape(len(FT_SENSORS), 6)
 
     def imu(self) -> ImuReading:
         """Head IMU (module doc)."""
         s, a = self.data.sensordata, self._imu_adr
-        return ImuReading(s[a["orientation"]:a["orientation"] + 4].copy(),
-                          s[a["gyro"]:a["gyro"] + 3].copy(),
-                          s[a["accelerometer"]:a["accelerometer"] + 3].copy())
+        gyro = s[a["gyro"]:a["gyro"] + 3].copy()
+        acc = s[a["accelerometer"]:a["accelerometer"] + 3].copy()
+        imu = self.imperfections.imu if self.imperfections else None
+        if imu is not None:
+            gyro, acc = imu.gyro(gyro), imu.accelerometer(acc)
+        return ImuReading(s[a["orientation"]:a["orientation"] + 4].copy(), gyro, acc)
 
     def contact_wrench(self, hand: str) -> Wrench:
         """Ground-truth total external wrench on ``hand``'s body (contacts + applied), in

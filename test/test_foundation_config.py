@@ -24,7 +24,7 @@ from icub_pmp.ros.pmp_node_config import PmpNodeConfig
 from icub_pmp.ros.reach_request import ReachRequestConfig
 from icub_pmp.ros.robot_state_publisher_config import RobotStatePublisherConfig
 from icub_pmp.vision import MotionSegmenterConfig, StereoTargetConfig
-from icub_sim_bridge import SimConfig
+from icub_sim_bridge import RealismConfig, SimConfig
 
 #: config/<node>.yaml -> the configuration classes the node declares as its parameters
 NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
@@ -37,7 +37,7 @@ NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
     "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig, ReachRequestConfig,
                     JacobianSourceConfig),
     "robot_state_publisher": (RobotStatePublisherConfig,),
-    "sim_bridge": (SimConfig,),
+    "sim_bridge": (SimConfig, RealismConfig),
     "wrench_estimator": (WrenchEstimatorConfig,),
 }
 NOT_NODE_FILES = {"robot.yaml"}  # the robot description, not a --params-file

@@ -14,7 +14,8 @@ Per step (one joint-state sample):
    than its set-point (pushed there; any joint in torque mode) gets a spring-damper pushing it
    back; set-points themselves are kept within the joint limits;
 4. the torque loop (eqs 4-5, :class:`TorquePid`) on ``e = tau_hat - tau_d`` when a fresh
-   estimate ``tau_hat`` exists;
+   estimate ``tau_hat`` exists, plus the joint friction of the desired motion
+   (:class:`FrictionCompensation`, ``friction_compensation``);
 5. saturation at the :class:`RobotSpec` torque limits.
 
 Watchdogs: an estimate older than ``estimate_timeout`` (in the joint states' time) turns the
@@ -40,6 +41,7 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
+from icub_pmp.control.friction_compensation import FrictionCompensation
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.control.joint_trajectory import JointTrajectory
 from icub_pmp.control.setpoint_generator import Setpoint, SetpointGenerator
@@ -142,6 +144,9 @@ class ImpedanceController:
             kind: np.array(c.gains(kind, "stiffness")) for kind in ("position", "impedance")
         }
         self._d = {kind: np.array(c.gains(kind, "damping")) for kind in ("position", "impedance")}
+        self._friction = FrictionCompensation(
+            np.array(c.friction("coulomb")), np.array(c.friction("viscous")),
+            c.friction_velocity_epsilon) if c.friction_compensation else None
         self._pid.set_gains(c.torque_kp, c.torque_ki, c.torque_kd, c.torque_kff,
                             c.torque_integral_limit, c.torque_derivative_cutoff_hz)
         self._tau_max = self.torque_limits * c.torque_limit_scale
@@ -397,6 +402,8 @@ class ImpedanceController:
             tau = self._pid(tau_d, self._est, dt, self._est_mask, self._saturated)
         else:
             tau = tau_d.copy()
+        if self._friction is not None:  # the gearbox's friction, added back (eqs 4-5)
+            tau += self._friction(sp.v)
 
         # saturation
         self._saturated = np.abs(tau) > self._tau_max

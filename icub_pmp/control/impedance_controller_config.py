@@ -57,6 +57,12 @@ class ImpedanceControllerConfig(ConfigBase):
     torque_kff: float = 1.0  # feed-forward gain on tau_d
     torque_integral_limit: float = 2.0  # clamp of the integral term [N m]
     torque_derivative_cutoff_hz: float = 50.0  # low-pass of e_dot [Hz]
+    # friction compensation in the torque loop (icub_pmp/control/friction_compensation.py),
+    # per group torso, arm, neck, eyes
+    friction_compensation: bool = False  # add the joint friction model to the command
+    friction_coulomb: tuple[float, ...] = (0.4, 0.15, 0.05, 0.05)  # [N m]
+    friction_viscous: tuple[float, ...] = (0.3, 0.1, 0.02, 0.02)  # [N m s/rad]
+    friction_velocity_epsilon: float = 0.01  # tanh smoothing speed of the Coulomb term [rad/s]
     # safety
     torque_limit_scale: float = 1.0  # saturate at this fraction of the RobotSpec limits
     joint_limit_margin: float = 0.03  # guard band inside each joint limit [rad]
@@ -78,7 +84,8 @@ class ImpedanceControllerConfig(ConfigBase):
     feedback_every: int = 50  # action feedback every N control steps
     # node
     lockstep: bool = True  # answer every /joint_states at once (stamp copied)
-    wait_for_estimate: bool = False  # lockstep: answer only with an estimate of the same stamp
+    wait_for_estimate: bool = True  # while the simulator runs lockstep (/sim/status): answer
+    # a joint state only with the estimate of its stamp (never in free run)
     state_publish_every: int = 10  # publish /impedance_controller/state every N steps
 
     def validate(self) -> None:
@@ -109,6 +116,14 @@ class ImpedanceControllerConfig(ConfigBase):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ConfigError(f"{name} must be finite and >= 0, got {v}")
+        for name in ("friction_coulomb", "friction_viscous"):
+            v = getattr(self, name)
+            if len(v) != len(GROUP_SIZES) or any(not (math.isfinite(x) and x >= 0) for x in v):
+                raise ConfigError(f"{name}: expected {len(GROUP_SIZES)} values >= 0 (torso, "
+                                  f"arm, neck, eyes), got {list(v)}")
+        if not self.friction_velocity_epsilon > 0:
+            raise ConfigError("friction_velocity_epsilon must be > 0, got "
+                              f"{self.friction_velocity_epsilon}")
         if self.feedback_every < 1:
             raise ConfigError(f"feedback_every must be >= 1, got {self.feedback_every}")
         for name in ("torque_derivative_cutoff_hz", "estimate_timeout", "state_timeout",
@@ -120,6 +135,12 @@ class ImpedanceControllerConfig(ConfigBase):
                 f"torque_limit_scale must be in (0, 1], got {self.torque_limit_scale}")
         if self.state_publish_every < 0:
             raise ConfigError(f"state_publish_every must be >= 0, got {self.state_publish_every}")
+
+    def friction(self, which: str) -> tuple[float, ...]:
+        """Per-joint friction_``which`` (coulomb / viscous) in the order of :meth:`gains`."""
+        t, a, n, e = getattr(self, f"friction_{which}")
+        s = GROUP_SIZES
+        return (t,) * s["torso"] + (a,) * (2 * s["arm"]) + (n,) * s["neck"] + (e,) * s["eyes"]
 
     def gains(self, kind: str, gain: str) -> tuple[float, ...]:
         """Concatenated group vector of ``kind`` (position/impedance) ``gain``

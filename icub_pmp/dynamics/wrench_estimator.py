@@ -31,6 +31,11 @@ import numpy as np
 from icub_pmp.dynamics.butterworth_low_pass import ButterworthLowPass
 from icub_pmp.dynamics.contact_detector import ContactDetector
 from icub_pmp.dynamics.ft_dynamics_model import FtDynamicsModel
+from icub_pmp.dynamics.ft_offset_calibration import (
+    CalibrationError,
+    FtOffsetCalibration,
+    FtOffsets,
+)
 from icub_pmp.dynamics.joint_state_filter import FilteredState, JointStateFilter
 from icub_pmp.dynamics.random_features_ridge import RandomFeaturesRidge
 from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
@@ -81,6 +86,9 @@ class WrenchEstimator:
             self.nq, rate, cfg.velocity_cutoff_hz, cfg.acceleration_cutoff_hz
         )
         self._ft_filter = {h: ButterworthLowPass(6, cfg.ft_cutoff_hz, rate) for h in HANDS}
+        # the model's sensor wrench through the same low-pass: measured and predicted wrenches
+        # then have the same lag (a filter on the measurement alone is an error in motion)
+        self._model_filter = {h: ButterworthLowPass(6, cfg.ft_cutoff_hz, rate) for h in HANDS}
         self._imu_filter = ButterworthLowPass(3, cfg.imu_cutoff_hz, rate)
         self._contact = {
             h: ContactDetector(cfg.contact_force_on, cfg.contact_force_off,
@@ -112,6 +120,13 @@ class WrenchEstimator:
         self._offset_n = 0
         self._samples = 0
         self._last_contact = {h: False for h in HANDS}
+        #: the last samples' FT residuals, for :meth:`calibrate_from_recent`
+        self.calibration = FtOffsetCalibration(
+            cfg.calibration_samples, self.nq, len(HANDS), cfg.calibration_motion_tolerance,
+            tuple(self.joint_names))
+        self.calibrated = False  # offsets from a calibration (not the start-up average)
+        self.calibration_error: str = ""  # why the last start-up attempt was refused
+        self._residual = np.zeros((len(HANDS), 6))
 
     # ------------------------------------------------------------------ helpers
     def apply_live_config(self, config: WrenchEstimatorConfig) -> None:
@@ -138,7 +153,7 @@ class WrenchEstimator:
         afresh at its own time. The FT offsets (a property of the sensors) and the learnt RFRR
         stay."""
         self._filter.reset()
-        for f in self._ft_filter.values():
+        for f in list(self._ft_filter.values()) + list(self._model_filter.values()):
             f.reset()
         self._imu_filter.reset()
         for c in self._contact.values():
@@ -150,6 +165,21 @@ class WrenchEstimator:
         self._offset = {h: np.zeros(6) for h in HANDS}
         self._offset_acc = {h: np.zeros(6) for h in HANDS}
         self._offset_n = 0
+        self.calibrated = False
+        self.calibration.clear()
+
+    def calibrate_from_recent(self) -> FtOffsets:
+        """Set the FT offsets to the mean residual (measured - predicted) of the last
+        ``calibration_samples`` samples (:class:`FtOffsetCalibration`); raises
+        :class:`CalibrationError` (offsets unchanged) when the robot moved during them or
+        fewer samples came. The robot must be still and free of contact."""
+        result = self.calibration.calibrate()
+        for k, h in enumerate(HANDS):
+            self._offset[h] = result.offsets[k].copy()
+        self._offset_n = max(self.config.ft_offset_samples, 1)
+        self.calibrated = True
+        self.calibration_error = ""
+        return result
 
     @property
     def offsets(self) -> dict[str, np.ndarray]:
@@ -241,6 +271,8 @@ class WrenchEstimator:
         # eqs 8-10: the internal wrench through each sensor (model; parent on child), and the
         # forward kinematics for eq 2
         free = self.model.free_sensor_wrenches(state.q, state.v, state.a)
+        if cfg.ft_cutoff_hz > 0:
+            free = {h: self._model_filter[h](free[h]) for h in HANDS}
         self._samples += 1
 
         # predicted internal wrench p in the sensor's convention: model (+ learnt residual)
@@ -263,6 +295,16 @@ class WrenchEstimator:
             for h in HANDS:
                 self._offset_acc[h] += x[h] - p[h]
                 self._offset[h] = self._offset_acc[h] / self._offset_n
+        r = self._residual
+        for k, h in enumerate(HANDS):
+            r[k] = x[h] - p[h]
+        self.calibration.add(q, r)
+        if cfg.calibrate_at_startup and not self.calibrated and self.calibration.full:
+            try:
+                self.calibrate_from_recent()
+            except CalibrationError as exc:  # moved: try again on the next full window
+                self.calibration_error = str(exc)
+                self.calibration.clear()
         if self._offset_n:
             x = {h: x[h] - self._offset[h] for h in HANDS}
 

@@ -30,6 +30,9 @@ class WrenchEstimatorConfig(ConfigBase):
     imu_frame: str = "head_imu_0"  # URDF frame of the /imu measurements
     imu_cutoff_hz: float = 3.0  # low-pass on the IMU acceleration [Hz] (wbd default 3 Hz)
     ft_offset_samples: int = 0  # average (measured - model) over the first N samples, 0 = off
+    calibration_samples: int = 500  # FT offset calibration (~/calibrate): the last N samples
+    calibration_motion_tolerance: float = 0.01  # joint spread over them that refuses it [rad]
+    calibrate_at_startup: bool = False  # calibrate once the first still N samples are in
     contact_force_on: float = 1.0  # external force norm that sets the contact flag [N]
     contact_force_off: float = 0.5  # external force norm that clears it [N]
     contact_min_samples: int = 5  # consecutive samples needed to switch the flag
@@ -84,6 +87,11 @@ class WrenchEstimatorConfig(ConfigBase):
                      "publish_every"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if self.calibration_samples < 1:
+            raise ConfigError(f"calibration_samples must be >= 1, got {self.calibration_samples}")
+        if not self.calibration_motion_tolerance > 0:
+            raise ConfigError("calibration_motion_tolerance must be > 0 rad, got "
+                              f"{self.calibration_motion_tolerance}")
         if self.ft_offset_samples < 0:
             raise ConfigError(f"ft_offset_samples must be >= 0, got {self.ft_offset_samples}")
         for name in ("rfrr_bandwidth", "rfrr_ridge", "rfrr_position_scale",

@@ -18,24 +18,30 @@ actions    /impedance_controller/follow_joint_trajectory (icub_interfaces/action
            (:class:`~icub_pmp.ros.trajectory_action_server.TrajectoryActionServer`)
 
 Stepping: with ``lockstep`` every /joint_states message is answered at once (with
-``wait_for_estimate`` only once the estimate of the same stamp has arrived, or after
-``estimate_timeout`` of wall time without it), so the 1 kHz loop is exact in simulated
-time; otherwise a timer at ``rate_hz`` steps on the latest joint state. Trajectories start
-at their header stamp (0 = now, a past stamp = now) in the time of the joint states. Bad
-input (NaN, unknown joints, non-increasing times, points beyond the joint limits, missing
-joints, faster than the joints' velocity/acceleration limits) is dropped with a warning; the
-controller keeps running. Watchdogs: a 20 Hz timer on the node clock (simulated time with
-``use_sim_time``, as the everyday graph runs) trips the safe hold when no joint state came for
-``state_timeout``; a wall-clock timer trips it when none came for ``state_wall_timeout`` of
-wall time (the simulator is paused or gone: simulated time has stopped, so only wall time can
-tell); estimates older than ``estimate_timeout`` switch the torque loop off and none for
-``estimate_lost_timeout`` latches a safe hold. Each is logged once and shown on the status
-topic. A joint state older than the newest (a restarted simulator: simulated time went back,
-:class:`~icub_pmp.time_jump_detector.TimeJumpDetector`) ends the running goals, drops the old
-timeline's estimate and the lockstep estimate gate and holds the measured posture; it is said
-in the log. All :class:`ImpedanceControllerConfig` parameters can change at run time
-(validated).
-"""
+``wait_for_estimate``, while the simulator says on /sim/status that it runs lockstep, only
+once the estimate of the same stamp has arrived, or after ``estimate_timeout`` of wall time
+without it: every 1 kHz step then uses the estimate of its own joint state; no waiting
+before the first estimate, when the estimator runs on one sample in N > 1 (the gap between
+estimates is larger than between joint states) or once the last one is older than
+``estimate_timeout``, so a
+stopped estimator costs no wall time and the ``estimate_lost_timeout`` safe hold comes in
+simulated time; a free-running simulator does not wait for anyone, so neither does the
+controller), so the 1 kHz loop is
+exact in simulated time; otherwise a timer at ``rate_hz`` steps on the latest joint state.
+Trajectories start at their header stamp (0 = now, a past stamp = now) in the time of the
+joint states. Bad input (NaN, unknown joints, non-increasing times, points beyond the joint
+limits, missing joints, faster than the joints' velocity/acceleration limits) is dropped
+with a warning; the controller keeps running. Watchdogs: a 20 Hz timer on the node clock
+(simulated time with ``use_sim_time``, as the everyday graph runs) trips the safe hold when
+no joint state came for ``state_timeout``; a wall-clock timer trips it when none came for
+``state_wall_timeout`` of wall time (the simulator is paused or gone: simulated time has
+stopped, so only wall time can tell); estimates older than ``estimate_timeout`` switch the
+torque loop off and none for ``estimate_lost_timeout`` latches a safe hold. Each is logged
+once and shown on the status topic. A joint state older than the newest (a restarted
+simulator: simulated time went back, :class:`~icub_pmp.time_jump_detector.TimeJumpDetector`)
+ends the running goals, drops the old timeline's estimate and the lockstep estimate gate and
+holds the measured posture; it is said in the log. All :class:`ImpedanceControllerConfig`
+parameters can change at run time (validated). """
 
 from __future__ import annotations
 
@@ -50,7 +56,7 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from icub_interfaces.msg import ControllerStatus
+from icub_interfaces.msg import ControllerStatus, SimStatus
 from icub_pmp.control.estimate_gate import EstimateGate
 from icub_pmp.control.impedance_controller import ImpedanceController
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
@@ -122,6 +128,12 @@ class ImpedanceControllerNode(Node):
         self.create_subscription(JointState, "/impedance_controller/velocity_command",
                                  self._on_velocity, _TRAJ_QOS)
         self.create_service(Trigger, "/impedance_controller/hold", self._on_hold)
+        self._sim_mode = ""  # the simulator's stepping mode (/sim/status), "" = none seen
+        # stamps [ns]: the last estimate and joint state, and the gaps before them (an
+        # estimator on one sample in N leaves N - 1 joint states without their own estimate)
+        self._est_ns = self._js_ns = -(2**62)
+        self._est_gap_ns = self._js_gap_ns = 2**62
+        self.create_subscription(SimStatus, "/sim/status", self._on_sim_status, LATCHED_QOS)
         self.pub_status = self.create_publisher(ControllerStatus, "/impedance_controller/status",
                                                 LATCHED_QOS)
         self.action = TrajectoryActionServer(self, self.controller, lambda: self._t_last)
@@ -190,11 +202,30 @@ class ImpedanceControllerNode(Node):
             self._latest_new = True
             return
         sample = (ns * 1e-9, q, v, stamp)
-        if cfg.wait_for_estimate and cfg.torque_loop:
+        if ns > self._js_ns:
+            self._js_gap_ns, self._js_ns = ns - self._js_ns, ns
+        age = self.controller.estimate_age(ns * 1e-9)
+        if (cfg.wait_for_estimate and cfg.torque_loop and self._sim_mode == "lockstep"
+                and 0.0 <= age <= cfg.estimate_timeout  # estimates come
+                and 2 * self._est_gap_ns <= 3 * self._js_gap_ns):  # one per joint state
             sample = self.gate.offer(ns, sample)
             if sample is None:
                 return  # waits for its estimate
         self._step(*sample)
+
+    def _on_sim_status(self, msg: SimStatus) -> None:
+        """Follow the simulator's stepping mode (``wait_for_estimate`` acts in lockstep)."""
+        if msg.mode != self._sim_mode:
+            waits = (msg.mode == "lockstep" and self.controller.config.wait_for_estimate
+                     and self.controller.config.torque_loop)
+            what = "each joint state waits for its estimate" if waits else \
+                "joint states do not wait for estimates"
+            self.get_logger().info(f"simulator mode {msg.mode!r}: {what}")
+            self._sim_mode = msg.mode
+            if not waits:
+                held = self.gate.expired(-1.0)  # answer a held joint state at once
+                if held is not None:
+                    self._step(*held)
 
     def _on_estimate(self, data: bytes) -> None:
         try:
@@ -207,6 +238,8 @@ class ImpedanceControllerNode(Node):
         except IcubPmpError as exc:
             self._warn("estimate", f"/estimated_joint_torques dropped: {exc}")
             return
+        if ns > self._est_ns:
+            self._est_gap_ns, self._est_ns = ns - self._est_ns, ns
         sample = self.gate.estimate(ns)
         if sample is not None:
             self._step(*sample)

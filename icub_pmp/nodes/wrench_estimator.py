@@ -11,6 +11,11 @@ publishes  /estimated_joint_torques (JointState: name + effort [N m], stamp of t
            /wrench_estimator/contact/{left,right}_hand (std_msgs/Bool),
            /wrench_estimator/predicted_ft/{l_arm_ft,r_arm_ft} (WrenchStamped: the FT reading
            the model predicts with null hand wrenches, for the Table 1 validation)
+services   ~/calibrate (std_srvs/Trigger): FT offset calibration from the last
+           ``calibration_samples`` samples, which must be still and contact-free (as
+           wholeBodyDynamics's ``calib``): success with the offsets, or success=false and the
+           reason (the robot moved, too few samples) with the offsets unchanged;
+           ``calibrate_at_startup`` does it once by itself as soon as a still window is in
 
 Time: the estimator works on message stamps only (no clock, ``use_sim_time`` not needed: it
 saves deserialising /clock at 1 kHz). Synchronisation: with ``require_same_stamp`` (lockstep
@@ -44,7 +49,9 @@ from rclpy.qos import qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import Imu, JointState
 from std_msgs.msg import Bool
+from std_srvs.srv import Trigger
 
+from icub_pmp.dynamics.ft_offset_calibration import CalibrationError
 from icub_pmp.dynamics.stamp_synchroniser import StampSynchroniser
 from icub_pmp.dynamics.wrench_estimator import WrenchEstimator
 from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
@@ -129,6 +136,8 @@ class WrenchEstimatorNode(Node):
                                      lambda m, h=h: self._on_ft(h, m), sd, raw=True)
         self._imu_sub = None
         self._update_imu_subscription(self.config)
+        self.create_service(Trigger, "~/calibrate", self._srv_calibrate)
+        self._calibration_said = ""  # the last start-up calibration outcome logged
         self.get_logger().info(
             f"wrench_estimator: {len(self.names)} joints, FT convention "
             f"{self.config.ft_convention}, gravity from {self.config.gravity_source}, "
@@ -161,6 +170,32 @@ class WrenchEstimatorNode(Node):
             self.destroy_subscription(self._imu_sub)
             self._imu_sub = None
             self._imu = None
+
+    # ------------------------------------------------------------------ calibration
+    def _srv_calibrate(self, req: Trigger.Request, resp: Trigger.Response) -> Trigger.Response:
+        """~/calibrate (module doc). Runs on the executor thread, between two samples."""
+        try:
+            r = self.estimator.calibrate_from_recent()
+        except CalibrationError as exc:
+            resp.success, resp.message = False, str(exc)
+            self.get_logger().warning(str(exc))
+            return resp
+        resp.success = True
+        resp.message = _describe_offsets(r.offsets, r.samples, r.spread)
+        self.get_logger().info(resp.message)
+        return resp
+
+    def _report_startup_calibration(self) -> None:
+        """Log the start-up calibration once it is made, and (throttled) why it waits."""
+        est = self.estimator
+        if est.calibrated and self._calibration_said != "done":
+            self._calibration_said = "done"
+            off = est.offsets
+            self.get_logger().info("start-up " + _describe_offsets(
+                np.array([off[h] for h in HANDS]), est.config.calibration_samples, 0.0))
+        elif est.calibration_error and self._calibration_said != est.calibration_error:
+            self._calibration_said = est.calibration_error
+            self.warn("calibration", f"start-up calibration waits: {est.calibration_error}")
 
     # ------------------------------------------------------------------ inputs
     def _warn(self, kind: str, text: str) -> None:
@@ -264,6 +299,8 @@ class WrenchEstimatorNode(Node):
             self._warn("sample", f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
             return
         self.samples += 1
+        if self.config.calibrate_at_startup and self._calibration_said != "done":
+            self._report_startup_calibration()
         # serialised directly (raw_messages): the names are encoded once
         self.pub_tau.publish(self._tau_writer.write(ns, effort=est.tau))
         if self.samples % self.config.publish_every:
@@ -286,6 +323,14 @@ class WrenchEstimatorNode(Node):
             b = self._bool[h]
             b.data = bool(est.contact[h])
             self.pub_contact[h].publish(b)
+
+
+def _describe_offsets(offsets: np.ndarray, samples: int, spread: float) -> str:
+    """One line for a user: the offsets per sensor (force [N], torque [N m])."""
+    parts = [f"{_FT_TOPIC[h]} force {np.round(offsets[k, :3], 3).tolist()} N, torque "
+             f"{np.round(offsets[k, 3:], 4).tolist()} N m" for k, h in enumerate(HANDS)]
+    return (f"FT offsets calibrated over {samples} samples (joint spread "
+            f"{np.degrees(spread):.3f} deg): " + "; ".join(parts))
 
 
 def main(args: list[str] | None = None) -> None:
