@@ -39,7 +39,9 @@ def test_registry_holds_every_paper_in_report_order():
     assert len(names) == len(set(names))
     for must in ("pmp_fig2_joint_limits", "pmp_fig3_torque_limits", "pmp_fig4_9_tbg",
                  "pmp_fig7_trunk", "pmp_fig8_transport", "pmp_sect4_unreachable",
-                 "pmp_eq4a_basic_vs_default", "body_schema_model_rmse", "body_schema_gng_map"):
+                 "pmp_eq4a_basic_vs_default", "force_table1_ft_prediction",
+                 "force_fig6_7_rfrr_vs_krr", "force_fig11_motioncut_heldout",
+                 "body_schema_model_rmse", "body_schema_gng_map"):
         assert must in names
     assert names[0].startswith("pmp_") and names[-1].startswith("body_schema_")
     for e in EXPERIMENTS:
@@ -66,6 +68,30 @@ def test_pmp_claims_hold_at_a_tiny_size(results):
     for name in ("pmp_fig2_joint_limits", "pmp_fig3_torque_limits", "pmp_fig4_9_tbg",
                  "pmp_fig7_trunk", "pmp_fig8_transport", "pmp_sect4_unreachable"):
         assert results[name].status == "reproduced", (name, results[name].verdict)
+
+
+def test_heldout_motion_sequences_are_never_tuning_sequences():
+    """Fig 11 runs on held-out sequences: no seed is one the segmenter was tuned on
+    (bench/motion.py's 7 and 11), seeds are distinct, both cameras and both head axes occur."""
+    from icub_pmp.paper.motion_experiments import TUNING_SEEDS, heldout_specs
+
+    bench = (ROOT / "bench" / "motion.py").read_text()
+    assert "seed=7" in bench and "seed=11" in bench and TUNING_SEEDS == {7, 11}
+    seqs = heldout_specs(16)
+    seeds = [s.spec.seed for s in seqs]
+    assert len(set(seeds)) == len(seeds) and not set(seeds) & TUNING_SEEDS
+    assert {s.camera for s in seqs} == {"left", "right"}
+    assert {s.spec.head_axis for s in seqs} == {"yaw", "pitch"}
+    assert all(s.noise_std > 0 and s.spec.head_rate > 0 for s in seqs)
+
+
+def test_force_rows_say_which_simulator_they_ran_on(results):
+    """The force paper's simulator rows name the preset they ran on (or say the simulator was
+    the ideal one, until SimConfig has a 'realism' field)."""
+    from icub_pmp.paper.force_experiments import realism_note
+
+    for name in ("force_table1_ft_prediction", "force_fig6_7_rfrr_vs_krr"):
+        assert realism_note() in results[name].verdict
 
 
 def test_body_model_row_waits_for_the_body_schema_package(results):

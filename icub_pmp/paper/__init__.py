@@ -1,7 +1,12 @@
 """The papers' results reproduced side by side (issue 21): experiments as plain functions
 ``run(size) -> ExperimentResult`` in a registry, and a report writer. No ROS imports."""
 
-from icub_pmp.paper import body_schema_experiments, pmp_experiments  # noqa: F401 (register)
+from icub_pmp.paper import (  # noqa: F401 (they register their experiments)
+    body_schema_experiments,
+    force_experiments,
+    motion_experiments,
+    pmp_experiments,
+)
 from icub_pmp.paper.experiment_result import (
     STATUSES,
     Curve,
