@@ -11,7 +11,7 @@ TF2_MSGS = $$(test -e $(VENV)/share/ament_index/resource_index/packages/tf2_msgs
 PKG := setup.py setup.cfg package.xml $(wildcard config/*.yaml)
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: env test lint demo bench clean lock
+.PHONY: env test lint demo bench paper clean lock
 
 env: $(VENV)/.deps-stamp install/.build-stamp
 
@@ -45,6 +45,10 @@ demo: env
 # every benchmark's --quick run, one after the other, then BENCHMARKS.md rewritten
 bench: env
 	scripts/env.sh python bench/run_all.py
+
+# the papers' results side by side: paper/<timestamp>/report.md (PAPER_ARGS=--quick for CI)
+paper: env
+	scripts/env.sh python -m icub_pmp.paper $(PAPER_ARGS)
 
 clean:
 	rm -rf build install log

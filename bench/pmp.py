@@ -14,7 +14,13 @@ loaded machine it stays near the unloaded wall time) (relaxation, posture-memory
 TBG sampling of the trajectory, residuals); the posture memory is built once before timing
 (reported as memory_build_s) and the predicted hand paths (computed on demand, for the node's
 nav_msgs/Path) are timed separately. The same targets go to DLS (icub_pmp.baselines.DlsSolver, same
-joints, limits and start). Ends with one JSON line. Timings depend on the machine's load.
+joints, limits and start): once from the rest posture (the ``dls_*`` keys) and, for a fair
+comparison with PMP's posture-memory retries, with restarts: the same budget of tries as PMP
+(1 + ``posture_memory_attempts``), each restart from a configuration drawn uniformly within the
+joint limits (seeded), stopping at the first success (the ``dls_restart_*`` keys; the time is
+that of all the tries). Joint-limit violations: plans with any trajectory sample (PMP) or final
+configuration (DLS) outside the URDF limits (goal 0). Ends with one JSON line. Timings depend on
+the machine's load.
 
 The request fields of /pmp/reach (built as pmp_planner builds them, config/pmp_planner.yaml's
 defaults of icub_pmp.ros.reach_request.ReachRequestConfig), on scenes of their own seeds, each
@@ -77,11 +83,19 @@ def make_targets(planner: PmpPlanner, n: int, seed: int) -> tuple[np.ndarray, np
     return np.array([prov.positions(q, frames) for q in qs]), qs
 
 
+def outside_limits(planner: PmpPlanner, joints, positions: np.ndarray) -> bool:
+    """Whether any row of ``positions`` (k, len(joints)) [rad] leaves the URDF joint range."""
+    idx = [planner.provider.joint_names.index(j) for j in joints]
+    lo, hi = planner.provider.lower[idx], planner.provider.upper[idx]
+    return bool(np.any(positions < lo - 1e-9) or np.any(positions > hi + 1e-9))
+
+
 def run_pmp(planner: PmpPlanner, targets: np.ndarray) -> dict:
     prov, spec = planner.provider, planner.spec
     frames = [spec.hand_frame("left"), spec.hand_frame("right")]
     rest = planner.start_configuration(None)
     times, cpu, paths_times, residuals, steps, fallback = [], [], [], [], [], 0
+    violations = 0
     for x in targets:
         goal = ReachGoal(targets={"left": x[0], "right": x[1]}, tau=TAU)
         c0 = time.thread_time()
@@ -97,7 +111,9 @@ def run_pmp(planner: PmpPlanner, targets: np.ndarray) -> dict:
         paths_times.append(t2 - t0)
         steps.append(plan.trace.steps)
         fallback += plan.attempts > 1
+        violations += outside_limits(planner, plan.joint_names, plan.positions)
     return {
+        "violations": violations,
         "times": np.array(times) * 1e3,
         "cpu": np.array(cpu) * 1e3,
         "paths_times": np.array(paths_times) * 1e3,
@@ -107,24 +123,39 @@ def run_pmp(planner: PmpPlanner, targets: np.ndarray) -> dict:
     }
 
 
-def run_dls(planner: PmpPlanner, targets: np.ndarray) -> dict:
-    spec = planner.spec
+def run_dls(planner: PmpPlanner, targets: np.ndarray, tries: int = 1, seed: int = 0) -> dict:
+    """DLS on every target from the rest posture; when it fails and ``tries`` > 1, up to
+    ``tries`` - 1 restarts from uniform random configurations within the limits (seeded)."""
+    spec, prov = planner.spec, planner.provider
     joints = spec.torso_joints + spec.left_arm_joints + spec.right_arm_joints
-    dls = DlsSolver(planner.provider, PMP_DLS_CONFIG)
+    idx = [prov.joint_names.index(j) for j in joints]
+    dls = DlsSolver(prov, PMP_DLS_CONFIG)
     hands = [spec.hand_frame("left"), spec.hand_frame("right")]
     rest = planner.start_configuration(None)
-    times, cpu, residuals, iters = [], [], [], []
+    rng = np.random.default_rng(seed)
+    times, cpu, residuals, iters, used, violations = [], [], [], [], [], 0
     for x in targets:
         c0 = time.thread_time()
         t0 = time.perf_counter()
-        sol = dls.solve(rest, joints, hands, x)
+        start, best, n_tries = rest, None, 0
+        while n_tries < tries:
+            n_tries += 1
+            sol = dls.solve(start, joints, hands, x)
+            if best is None or sol.position_error < best.position_error:
+                best = sol
+            if sol.success:
+                break
+            start = rest.copy()
+            start[idx] = rng.uniform(prov.lower[idx], prov.upper[idx])
         times.append(time.perf_counter() - t0)
         cpu.append(time.thread_time() - c0)
-        residuals.append(sol.position_error)
-        iters.append(sol.iterations)
+        residuals.append(best.position_error)
+        iters.append(best.iterations)
+        used.append(n_tries)
+        violations += outside_limits(planner, joints, best.q[idx][None])
     return {"times": np.array(times) * 1e3, "cpu": np.array(cpu) * 1e3,
             "residuals": np.array(residuals),
-            "iterations": np.array(iters)}
+            "iterations": np.array(iters), "tries": np.array(used), "violations": violations}
 
 
 # ---------------------------------------------------------------------------- request fields
@@ -361,9 +392,12 @@ def main() -> None:
     transport = run_transport(planner, n_scenes, args.seed + 1)
     obstacles = run_obstacles(planner, n_scenes, args.seed + 2)
     forces = run_force_targets(planner, n_scenes, args.seed + 3)
+    budget = 1 + planner.config.posture_memory_attempts  # PMP's tries: relaxation + recalls
+    dls_r = run_dls(planner, targets, budget, args.seed)
 
     ok = pmp["residuals"] <= SUCCESS
     dok = dls["residuals"] <= SUCCESS
+    rok = dls_r["residuals"] <= SUCCESS
     r = {
         "n_targets": n,
         "seed": args.seed,
@@ -401,6 +435,15 @@ def main() -> None:
         "force_target_torque_ok_rate": forces["ok"],
         "force_target_free_plan_ok_rate": forces["free_ok"],
         "force_target_plan_ms_median": float(np.median(forces["times"])),
+        "joint_limit_violations": int(pmp["violations"]),
+        "dls_joint_limit_violations": int(dls["violations"]),
+        "tries_budget": budget,
+        "dls_restart_success_rate": float(rok.mean()),
+        "dls_restart_ms_median": float(np.median(dls_r["times"])),
+        "dls_restart_ms_p95": float(np.percentile(dls_r["times"], 95)),
+        "dls_restart_residual_mm_median": float(np.median(dls_r["residuals"]) * 1e3),
+        "dls_restart_tries_mean": float(dls_r["tries"].mean()),
+        "dls_restart_joint_limit_violations": int(dls_r["violations"]),
         "load_avg_1min": load,
     }
     print(f"PMP  success {r['success_rate']:.3f}  plan median {r['plan_ms_median']:.2f} ms  "
@@ -416,6 +459,11 @@ def main() -> None:
           f"{r['obstacle_success_rate']:.2f}, clearance min {r['obstacle_clearance_min_mm']:.1f} "
           f"mm (asked 20); force targets: torques ok {r['force_target_torque_ok_rate']:.2f} "
           f"(free plan {r['force_target_free_plan_ok_rate']:.2f})")
+    print(f"DLS with up to {budget} tries (PMP's budget)  success "
+          f"{r['dls_restart_success_rate']:.3f}  median {r['dls_restart_ms_median']:.2f} ms  "
+          f"tries mean {r['dls_restart_tries_mean']:.2f}; joint-limit violations PMP "
+          f"{r['joint_limit_violations']}, DLS {r['dls_joint_limit_violations']}, "
+          f"DLS with restarts {r['dls_restart_joint_limit_violations']}")
     failed = np.flatnonzero(~ok)
     if failed.size:
         print("PMP failures (target index: residual mm):",

@@ -3,7 +3,9 @@ lockstep with a controller in another process.
 
     scripts/env.sh python bench/sim.py [--quick]
 
-Figures (real-time factors = simulated s per wall s, medians of windows):
+Figures (real-time factors = simulated s per wall s, medians of 20 windows; each RTF also
+as ``*_p5`` (5th percentile of the windows) and ``*_slowest`` (the slowest window), so a stall
+the median hides shows):
 - physics_rtf: ``Simulator.step`` alone (1 ms steps, robot held, objects on the table).
 - node_rtf: the ``sim_bridge`` node as a subprocess, free-running as fast as possible,
   publishing /clock, /joint_states and the 4 FT every step to a listener process that
@@ -29,6 +31,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -40,21 +43,42 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 
-def physics_rtf(seconds: float) -> float:
-    """Real-time factor of Simulator.step alone (median of 5 windows)."""
+WINDOWS = 20  # RTF windows per measurement
+
+
+class Windows(NamedTuple):
+    """Real-time factors of consecutive windows: median, 5th percentile, slowest."""
+
+    median: float
+    p5: float
+    slowest: float
+
+    @classmethod
+    def of(cls, rates: list[float]) -> "Windows":
+        q = statistics.quantiles(rates, n=20, method="inclusive")  # q[0]: 5th percentile
+        return cls(statistics.median(rates), q[0], min(rates))
+
+    def keys(self, name: str) -> dict[str, float]:
+        """{name: median, name_p5: p5, name_slowest: slowest}, rounded."""
+        return {name: round(self.median, 2), f"{name}_p5": round(self.p5, 2),
+                f"{name}_slowest": round(self.slowest, 2)}
+
+
+def physics_rtf(seconds: float) -> Windows:
+    """Real-time factor of Simulator.step alone over WINDOWS windows."""
     from icub_sim_bridge import SimConfig, Simulator
 
     sim = Simulator(SimConfig(cameras_enabled=False))
     sim.step(200)
     rates = []
-    for _ in range(5):
+    for _ in range(WINDOWS):
         n = 0
         t0 = time.perf_counter()
-        while time.perf_counter() - t0 < seconds / 5:
-            sim.step(50)
-            n += 50
+        while time.perf_counter() - t0 < seconds / WINDOWS:
+            sim.step(10)
+            n += 10
         rates.append(n * sim.config.timestep / (time.perf_counter() - t0))
-    return statistics.median(rates)
+    return Windows.of(rates)
 
 
 def render_ms(frames: int) -> float:
@@ -74,8 +98,8 @@ def render_ms(frames: int) -> float:
     return statistics.median(times)
 
 
-def _clock_rtf(probe, seconds: float, warmup: float, pid: int) -> tuple[float, float]:
-    """(wall RTF, sim s per node CPU s) from /clock stamps over ``seconds`` (medians)."""
+def _clock_rtf(probe, seconds: float, warmup: float, pid: int) -> tuple[Windows, float]:
+    """(wall RTF windows, median sim s per node CPU s) from /clock stamps over ``seconds``."""
     from rosgraph_msgs.msg import Clock
 
     from icub_pmp.ros.conversions import time_to_sec
@@ -94,13 +118,13 @@ def _clock_rtf(probe, seconds: float, warmup: float, pid: int) -> tuple[float, f
             raise RuntimeError("no /clock from sim_bridge")
         time.sleep(warmup)
         rates, cpu = [], []
-        windows = 5
+        windows = WINDOWS
         for _ in range(windows):
             t_sim0, t0, c0 = last["t"], time.perf_counter(), _cpu_seconds(pid)
             time.sleep(seconds / windows)
             rates.append((last["t"] - t_sim0) / (time.perf_counter() - t0))
             cpu.append((last["t"] - t_sim0) / max(_cpu_seconds(pid) - c0, 1e-6))
-        return statistics.median(rates), statistics.median(cpu)
+        return Windows.of(rates), statistics.median(cpu)
     finally:
         probe.node.destroy_subscription(sub)
 
@@ -112,7 +136,7 @@ def _cpu_seconds(pid: int) -> float:
 
 
 def node_rtf(domain: int, seconds: float, params: dict, helper: list[str]
-             ) -> tuple[float, float]:
+             ) -> tuple[Windows, float]:
     """Start sim_bridge and a helper process (``--listener`` / ``--controller``); measure the
     wall-clock RTF and the sim time per CPU second of the node."""
     from icub_pmp.testing import NodeProcess, RosProbe, ros_environment
@@ -139,6 +163,7 @@ def node_rtf(domain: int, seconds: float, params: dict, helper: list[str]
 def _spin_until_interrupted(node) -> None:
     """Spin ``node`` on an EventsExecutor (spin_once loop: its spin() ignores SIGINT)."""
     import rclpy
+    from rclpy.executors import ExternalShutdownException
     from rclpy.experimental import EventsExecutor
 
     ex = EventsExecutor()
@@ -146,7 +171,7 @@ def _spin_until_interrupted(node) -> None:
     try:
         while rclpy.ok():
             ex.spin_once(timeout_sec=0.1)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):  # SIGINT, before or in rclpy
         pass
     finally:
         node.destroy_node()
@@ -224,7 +249,7 @@ def main() -> None:
     seconds = 4.0 if a.quick else 15.0
     res: dict[str, object] = {}
     t_start = time.perf_counter()
-    res["physics_rtf"] = round(physics_rtf(seconds), 2)
+    res.update(physics_rtf(seconds).keys("physics_rtf"))
     res["render_ms"] = round(render_ms(15 if a.quick else 60), 2)
     with reserve_domain_id() as domain:
         runs = {
@@ -236,7 +261,7 @@ def main() -> None:
         }
         for key, (params, helper) in runs.items():
             wall, cpu = node_rtf(domain, seconds, params, helper)
-            res[key] = round(wall, 2)
+            res.update(wall.keys(key))
             res[key.replace("_rtf", "_cpu_rtf")] = round(cpu, 2)
     res["cpu_count"] = os.cpu_count()
     res["load_avg_1min"] = round(os.getloadavg()[0], 2)

@@ -30,6 +30,7 @@ ADAPTER_LAYERS = {
     "icub_pmp.nodes": 2,
     "icub_pmp.cli": 2,
     "icub_pmp.demo": 3,
+    "icub_pmp.paper": 3,  # the paper report runs experiments on the simulator harness
     "icub_pmp.testing": 4,
 }
 SIM_HARNESS = "icub_sim_bridge.harness"  # test and benchmark support: layer 1
