@@ -6,8 +6,13 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
 
 1. ``bimanual_reach``: PMP reach of both hands to the sides of the box, torso recruited
    (Mohan et al. 2009, Sect. 3.1): both hands arrive together at tau.
-2. ``bimanual_transport``: both hands squeeze the box and lift it together (Sect. 3.2): the
-   hands move by the same displacement so the hand-to-hand distance is kept.
+2. ``bimanual_transport``: both hands squeeze the box and lift it together with the object
+   coupling of Sect. 3.2 (Fig 8): the goal pulls the held box, the box pulls both hands
+   (grasp points 2 cm inside its sides, so the palms keep pressing). Judged in the physics: the
+   box lifted by 4 cm or more. The measured hand-to-hand distance change during the lift is
+   reported (``hand_distance_change_max_m``); it is not yet within the 5 mm goal: 7.5 and
+   7.9 mm in two runs (2026-12-02) while the plan keeps it within 0.5 mm - the palms sink
+   further into the squeezed contact as the box's weight loads it.
 3. ``vision_reach``: the cylinder is moved across the table while the gaze controller tracks
    the motion segmenter's stereo target (/motion/target); once it stops, the right hand goes
    through PMP to the pre-grasp point above the estimated top (via a point above it when the
@@ -87,13 +92,13 @@ class DemoRunner:
         from icub_interfaces.msg import VisualTarget
 
         self.probe = probe
+        self._recorded: list | None = None  # /joint_states kept while a phase records them
         self.model = IcubModel()
         self.tolerance = tolerance
         self.latest: dict[str, object] = {}
         node = probe.node
         self._subs = [
-            node.create_subscription(JointState, "/joint_states",
-                                     lambda m: self.latest.__setitem__("js", m),
+            node.create_subscription(JointState, "/joint_states", self._on_joint_state,
                                      qos_profile_sensor_data),
             node.create_subscription(Clock, "/clock",
                                      lambda m: self.latest.__setitem__("clock", m),
@@ -123,6 +128,11 @@ class DemoRunner:
                 PoseStamped, f"/ground_truth/objects/{obj}",
                 lambda m, o=obj: self._on_object(o, m), qos_profile_sensor_data))
 
+    def _on_joint_state(self, msg) -> None:
+        self.latest["js"] = msg
+        if self._recorded is not None:
+            self._recorded.append(msg)
+
     def _on_estimate(self, msg) -> None:
         self.latest["estimate"] = msg
         self.estimates.append(msg)
@@ -144,14 +154,16 @@ class DemoRunner:
         if not self.probe.wait_for(lambda: self.sim_time() >= end, wall_timeout):
             raise TimeoutError(f"simulation did not advance {duration} s in {wall_timeout} s")
 
-    def q(self) -> np.ndarray:
-        """Measured configuration of the model's joints from the latest /joint_states."""
-        js = self.latest["js"]
+    def q(self, js=None) -> np.ndarray:  # noqa: ANN001 - ROS type
+        """Measured configuration of the model's joints from ``js`` (default the latest
+        /joint_states)."""
+        js = self.latest["js"] if js is None else js
         return self.model.q_from_dict(dict(zip(js.name, js.position)))
 
-    def hand_positions(self) -> dict[str, np.ndarray]:
-        """Hand frame positions in root_link measured in the physics [m]."""
-        q = self.q()
+    def hand_positions(self, js=None) -> dict[str, np.ndarray]:  # noqa: ANN001 - ROS type
+        """Hand frame positions in root_link measured in the physics [m] (from ``js``,
+        default the latest /joint_states)."""
+        q = self.q(js)
         return {h: self.model.frame_position(q, self.model.spec.hand_frame(h))
                 for h in ("left", "right")}
 
@@ -281,6 +293,57 @@ class DemoRunner:
                                     for h, e in zip(res.hands, res.arrival_errors)},
                              sim_start=sim0)
         return self._finish(result, targets, wall0, judge_physics)
+
+    def pmp_transport(self, name: str, position: np.ndarray, goal_position: np.ndarray,
+                      grasps: dict[str, np.ndarray], tau: float,
+                      max_distance_change: float | None = None) -> PhaseResult:
+        """Carry the object held by both hands from ``position`` to ``goal_position`` [m,
+        root_link] through /pmp/reach_action's object coupling (hold_object; ``grasps`` =
+        hand -> grasp point relative to the object [m]). The measured hand-to-hand distance
+        (every 10th /joint_states message of the motion) is reported as its largest change;
+        with ``max_distance_change`` [m] the phase fails when it changed by more."""
+        from icub_interfaces.action import Reach
+
+        goal = Reach.Goal()
+        goal.hands = ["left", "right"]
+        goal.use_torso = True
+        goal.tau = tau
+        goal.hold_object = True
+        for stamped, p in ((goal.object_pose, position), (goal.object_goal, goal_position)):
+            stamped.header.frame_id = "root_link"
+            stamped.pose.position.x, stamped.pose.position.y, stamped.pose.position.z = (
+                float(v) for v in p)
+        for h, g in grasps.items():
+            point = goal.left_grasp if h == "left" else goal.right_grasp
+            point.x, point.y, point.z = (float(v) for v in g)
+
+        def distance(js) -> float:  # noqa: ANN001 - ROS type
+            x = self.hand_positions(js)
+            return float(np.linalg.norm(x["left"] - x["right"]))
+
+        first = self.latest["js"]
+        wall0, sim0 = time.monotonic(), self.sim_time()
+        self._recorded = []
+        try:
+            res = self.probe.send_goal(self._action("/pmp/reach_action", Reach), goal,
+                                       300.0).result
+        finally:
+            recorded, self._recorded = self._recorded, None
+        samples = [distance(m) for m in [first] + recorded[::10] + recorded[-1:]]
+        change = float(np.max(np.abs(np.array(samples) - samples[0])))
+        too_far = max_distance_change is not None and change > max_distance_change
+        ok = res.outcome in ("reached", "not_reached") and not too_far
+        message = f"{res.outcome}: {res.message}"
+        if too_far:
+            message += (f"; the measured hand-to-hand distance changed by {change * 1e3:.1f} mm "
+                        f"(> {max_distance_change * 1e3:.0f} mm)")
+        targets = {h: list(map(float, goal_position + g)) for h, g in grasps.items()}
+        result = PhaseResult(name, ok, message, targets=targets,
+                             planned_residual=dict(zip(res.hands, res.planned_residuals)),
+                             extra={"hand_distance_change_max_m": change,
+                                    "hand_distance_samples": float(len(samples))},
+                             sim_start=sim0)
+        return self._finish(result, {}, wall0, judge_physics=False)
 
     def cartesian_reach(self, name: str, target: np.ndarray, T: float = 2.0) -> PhaseResult:
         """Go to ``target`` with the /cartesian/go_to_pose_action action (torso + right arm),
@@ -548,11 +611,13 @@ def run_phases(runner: DemoRunner, quick: bool) -> list[PhaseResult]:
     if r.success and not all(contact.values()):
         r.success = False
         r.message += f"; contact flags {contact} (both hands should touch the box)"
+    runner.wait_sim(1.0)  # the squeeze settles (the palms stop sinking into the contact)
     box0 = runner.object_position("box")
     hands0 = runner.hand_positions()
-    lift = {h: p + [0.0, 0.0, 0.08] for h, p in squeeze.items()}
-    r2 = runner.pmp_reach("bimanual_transport", lift, use_torso=True, tau=2.0,
-                          judge_physics=False)
+    # the object coupling (Sect. 3.2): grasp points 2 cm inside the box sides keep the squeeze
+    grasps = {h: p - box0 for h, p in squeeze.items()}
+    r2 = runner.pmp_transport("bimanual_transport", box0, box0 + [0.0, 0.0, 0.08], grasps,
+                              tau=2.0)
     box1 = runner.object_position("box")
     hands1 = runner.hand_positions()
     d0 = float(np.linalg.norm(hands0["left"] - hands0["right"]))
