@@ -125,7 +125,7 @@ class InterfaceFuzzer:
         if verdict is None or not verdict[0]:
             return
         if verdict[1].strip():
-            t.rejected += 1
+            t.reject(verdict[1])
         else:
             t.unclear += 1
             t.note(f"rejection without a message for {str(case)[:300]}")
@@ -174,7 +174,7 @@ class InterfaceFuzzer:
 
         if res.status == GoalStatus.STATUS_ABORTED and verdict is not None:
             if verdict[1].strip():
-                t.rejected += 1
+                t.reject(verdict[1])
             else:
                 t.unclear += 1
                 t.note(f"aborted without a message: {str(goal)[:300]}")
