@@ -67,6 +67,8 @@ def fuzz(probe: RosProbe, env: dict[str, str], scale: float) -> dict:
             "fuzz_hangs": tally.total("hangs"), "fuzz_unclear": tally.total("unclear"),
             "fuzz_rejected": tally.total("rejected"),
             "fuzz_cases_per_interface": {k: t.cases for k, t in tally.interfaces.items()},
+            "fuzz_rejections_top": {k: t.reasons.most_common(3)
+                                    for k, t in tally.interfaces.items() if t.reasons},
             "torque_commands_watched": watch.messages, "torque_violations": watch.violations,
             "torque_max_ratio": round(watch.worst, 3), "fuzz_s": round(time.monotonic() - t0),
         }

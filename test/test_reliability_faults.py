@@ -47,8 +47,8 @@ def test_controller_sigkill_simulator_times_out_and_resumes(injector):
     row = inj.run("impedance_controller", signal.SIGKILL)
     rows.append(row)
     _check(inj, row)
-    assert "lockstep timeouts" in row.simulator and not row.simulator.startswith("(no"), row
-    assert " 0 lockstep timeouts" not in row.simulator, row
+    # the simulator says it holds because the controller's answer did not come in time
+    assert "holding" in row.simulator.split(";")[0] and "lockstep_timeout" in row.simulator, row
     assert row.interrupted_goal and "hang" not in row.interrupted_goal, row
 
 

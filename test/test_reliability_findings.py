@@ -44,3 +44,52 @@ def test_max_durations_are_validated():
         MinJerkConfig(trajectory_time=2.0, max_trajectory_time=1.0).validate()
     with pytest.raises(ConfigError, match="max_neck_traj_time"):
         GazeControllerConfig(max_neck_traj_time=0.5).validate()
+
+
+def test_goal_to_a_paused_simulators_controller_ends(ros_probe, ros_domain_id):
+    """A case next to one the bench's fuzzer reported as a hang (2026-12-02: a
+    FollowJointTrajectory goal not ended 15 s after its cancel, the simulator possibly left
+    paused by the fuzzed /sim/set_paused): with the simulator paused and the controller in
+    safe hold, a goal and its cancel end within 15 s (they do: the hang was not reproduced
+    this way; goals and cancels are now sent on the probe's spin thread, see
+    RosProbe.on_spin_thread)."""
+    from std_srvs.srv import SetBool
+    from trajectory_msgs.msg import JointTrajectoryPoint
+
+    from icub_interfaces.action import FollowJointTrajectory
+    from icub_interfaces.msg import ControllerStatus
+    from icub_pmp.config import config_dir
+    from icub_pmp.ros.qos import LATCHED_QOS
+    from icub_pmp.testing import NodeProcess, ros_environment
+
+    env = ros_environment(ros_domain_id)
+    status: list = []
+    ros_probe.node.create_subscription(ControllerStatus, "/impedance_controller/status",
+                                       status.append, LATCHED_QOS)
+    sim = NodeProcess("sim_bridge", env=env, params_file=config_dir() / "sim_bridge.yaml",
+                      parameters={"cameras_enabled": False})
+    ctrl = NodeProcess("impedance_controller", env=env,
+                       params_file=config_dir() / "impedance_controller.yaml",
+                       parameters={"mode": "position"})
+    with sim, ctrl:
+        client = ros_probe.action_client("/impedance_controller/follow_joint_trajectory",
+                                          FollowJointTrajectory, timeout=120.0)
+        req = SetBool.Request()
+        req.data = True
+        assert ros_probe.call("/sim/set_paused", SetBool, req, 60.0).success
+        assert ros_probe.wait_for(lambda: status and status[-1].status == "safe_hold", 60.0)
+        goal = FollowJointTrajectory.Goal()
+        goal.trajectory.joint_names = ["r_elbow"]
+        pt = JointTrajectoryPoint()
+        pt.positions = [0.8]
+        pt.time_from_start.sec = 2
+        goal.trajectory.points = [pt]
+        sent = ros_probe.on_spin_thread(lambda: client.send_goal_async(goal))
+        assert ros_probe.wait_for(sent.done, 30.0)
+        handle = sent.result()
+        assert handle.accepted
+        result = handle.get_result_async()
+        ros_probe.on_spin_thread(handle.cancel_goal_async)
+        assert ros_probe.wait_for(result.done, 15.0), ctrl.output()[-3000:]
+        req.data = False
+        ros_probe.call("/sim/set_paused", SetBool, req, 30.0)

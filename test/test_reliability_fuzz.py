@@ -40,7 +40,7 @@ def fuzz(ros_domain_id, ros_probe_module):
         watch = TorqueWatch(probe)
         fuzzer = InterfaceFuzzer(probe, graph, tally=FuzzTally())
         yield fuzzer, watch
-        print("\n" + fuzzer.tally.table())
+        print("\n" + fuzzer.tally.table() + "\n" + fuzzer.tally.reasons())
 
 
 def _clean(tally, names) -> None:

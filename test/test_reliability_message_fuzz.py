@@ -85,3 +85,22 @@ def test_out_of_order_stamps():
     ts = out_of_order_stamps(6, 10.0, 0.001)
     assert any(b < a for a, b in zip(ts, ts[1:]))
     assert ts[-1] == ts[0]
+
+
+def test_fuzz_tally_totals_problems_and_reasons():
+    """The tally sums per interface, lists only the interfaces with a crash, hang or unclear
+    rejection, and groups rejection messages that differ only in their numbers."""
+    from icub_pmp.testing.fuzz_tally import FuzzTally
+
+    tally = FuzzTally()
+    a = tally.get("/a", "service", "node_a")
+    a.cases = 5
+    a.reject("tau: expected a finite duration >= 0 s, got -1.0")
+    a.reject("tau: expected a finite duration >= 0 s, got -2.0")
+    b = tally.get("/b", "topic", "node_b")
+    b.cases, b.hangs = 3, 1
+    b.note("no answer")
+    assert tally.total("cases") == 8 and tally.total("rejected") == 2
+    assert [p.split(" ")[0] for p in tally.problems()] == ["/b"]
+    assert a.reasons.most_common(1)[0][1] == 2
+    assert "/a" in tally.table() and "/b" in tally.table()

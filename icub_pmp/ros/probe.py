@@ -90,15 +90,33 @@ class RosProbe:
                 raise TypeError(f"RosProbe.destroy: cannot destroy {type(entity).__name__}")
             self._on_spin_thread(lambda fn=fn, e=entity: fn(e))
 
-    def _on_spin_thread(self, fn: Callable[[], Any]) -> None:
+    def _on_spin_thread(self, fn: Callable[[], Any]) -> Any:
         if not self._thread.is_alive() or threading.current_thread() is self._thread:
-            fn()
-            return
+            return fn()
         done = threading.Event()
-        self._pending.put((fn, done))
+        out: list[Any] = []
+        err: list[BaseException] = []
+
+        def run() -> None:
+            try:
+                out.append(fn())
+            except Exception as exc:  # raised in the caller's thread, not the spin thread
+                err.append(exc)
+
+        self._pending.put((run, done))
         self.executor.wake()  # end the current wait now
         if not done.wait(10.0):
-            raise TimeoutError("RosProbe: the spin thread did not run a destruction in 10 s")
+            raise TimeoutError("RosProbe: the spin thread did not run a call in 10 s")
+        if err:
+            raise err[0]
+        return out[0] if out else None
+
+    def on_spin_thread(self, fn: Callable[[], Any]) -> Any:
+        """Run ``fn`` on the spin thread and return its result. Send action goals and cancel
+        requests this way: rclpy's ActionClient registers a request only after sending it, so
+        an answer taken by the spin thread in between is dropped ("Ignoring unexpected goal
+        response") and the future never completes (seen under load, 2026-12-02)."""
+        return self._on_spin_thread(fn)
 
     # ---------------------------------------------------------------- graph waits
     def wait_for(self, predicate: Callable[[], bool], timeout: float) -> bool:
@@ -184,7 +202,7 @@ class RosProbe:
         ``feedback``; ``on_accepted(goal_handle)`` runs once accepted (e.g. to cancel it or
         to kill a node mid-motion). Raises TimeoutError."""
         cb = (lambda m: feedback.append(m.feedback)) if feedback is not None else None
-        sent = client.send_goal_async(goal, feedback_callback=cb)
+        sent = self.on_spin_thread(lambda: client.send_goal_async(goal, feedback_callback=cb))
         if not self.wait_for(sent.done, 30.0):
             raise TimeoutError("the goal was not acknowledged within 30 s")
         handle = sent.result()

@@ -196,8 +196,9 @@ class FaultInjector:
         out = FaultOutcome(node, signal.Signals(sig).name)
         early = self.probe.node.create_client(Reach, "/pmp/reach")
         feedback: list[Any] = []
-        sent = self.client.send_goal_async(reach_goal(self._target(), tau=2.0),
-                                           feedback_callback=feedback.append)
+        goal = reach_goal(self._target(), tau=2.0)
+        sent = self.probe.on_spin_thread(
+            lambda: self.client.send_goal_async(goal, feedback_callback=feedback.append))
         self.probe.wait_for(lambda: sent.done() and len(feedback) >= 3, 60.0)
         self.status.mark()
         self.graph.procs[node].signal(sig)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 
 __all__ = ["FuzzTally", "InterfaceTally"]
@@ -15,7 +16,8 @@ class InterfaceTally:
     ``hangs``: requests or goals not answered within the interface's time budget; ``unclear``:
     rejections (success false, an error code) with an empty message; ``rejected``: clear
     rejections; ``burst_hz``: the rate a topic burst reached [msg/s]; ``examples``: a few of
-    the problems, for the failure message.
+    the problems, for the failure message; ``reasons``: how often each rejection message
+    (its first 60 characters, numbers dropped) came back: how deep the cases got.
     """
 
     kind: str
@@ -28,6 +30,12 @@ class InterfaceTally:
     rejected: int = 0
     burst_hz: float = 0.0
     examples: list[str] = dataclasses.field(default_factory=list)
+    reasons: collections.Counter = dataclasses.field(default_factory=collections.Counter)
+
+    def reject(self, message: str) -> None:
+        """Count a clear rejection with its ``message``."""
+        self.rejected += 1
+        self.reasons["".join(c for c in message[:60] if not c.isdigit())] += 1
 
     def note(self, what: str) -> None:
         """Keep an example of a problem (the first five)."""
@@ -57,6 +65,12 @@ class FuzzTally:
         return [f"{name} ({t.node}): {t.crashes} crashes, {t.hangs} hangs, {t.unclear} unclear; "
                 f"e.g. {t.examples}"
                 for name, t in self.interfaces.items() if t.crashes or t.hangs or t.unclear]
+
+    def reasons(self, top: int = 3) -> str:
+        """The most frequent rejection messages per interface, one line each."""
+        return "\n".join(f"{name}: " + "; ".join(f"{n}x {r!r}" for r, n in
+                                                  t.reasons.most_common(top))
+                         for name, t in self.interfaces.items() if t.reasons)
 
     def table(self) -> str:
         """A fixed-width table: interface, kind, node, cases, rejected, crashes, hangs,

@@ -125,7 +125,7 @@ class InterfaceFuzzer:
         if verdict is None or not verdict[0]:
             return
         if verdict[1].strip():
-            t.rejected += 1
+            t.reject(verdict[1])
         else:
             t.unclear += 1
             t.note(f"rejection without a message for {str(case)[:300]}")
@@ -152,7 +152,7 @@ class InterfaceFuzzer:
 
     def _one_goal(self, t: InterfaceTally, client: Any, goal: Any, budget: float,
                   run_s: float) -> None:
-        sent = client.send_goal_async(goal)
+        sent = self.probe.on_spin_thread(lambda: client.send_goal_async(goal))
         if not self.probe.wait_for(sent.done, budget):
             t.hangs += 1
             t.note(f"goal not acknowledged in {budget} s: {str(goal)[:300]}")
@@ -163,7 +163,7 @@ class InterfaceFuzzer:
             return
         result = handle.get_result_async()
         if not self.probe.wait_for(result.done, run_s):
-            handle.cancel_goal_async()
+            self.probe.on_spin_thread(handle.cancel_goal_async)
             if not self.probe.wait_for(result.done, budget):
                 t.hangs += 1
                 t.note(f"goal not ended {budget} s after its cancel: {str(goal)[:300]}")
@@ -174,7 +174,7 @@ class InterfaceFuzzer:
 
         if res.status == GoalStatus.STATUS_ABORTED and verdict is not None:
             if verdict[1].strip():
-                t.rejected += 1
+                t.reject(verdict[1])
             else:
                 t.unclear += 1
                 t.note(f"aborted without a message: {str(goal)[:300]}")
