@@ -230,6 +230,26 @@ def test_estimator_lost_latches_a_safe_hold_until_estimates_return(base):
     assert out.status == "ok" and not c.safe_hold
 
 
+def test_a_restarted_estimator_that_lags_still_releases_the_hold(base):
+    """Estimates that come back 60-80 ms behind the joint states (a restarted estimator on a
+    loaded machine: older than estimate_timeout, 50 ms) release the estimator-lost hold, while
+    the torque loop waits for fresh ones; an estimate older than the hold does not."""
+    c = _ctl(base, torque_loop=True, estimate_lost_timeout=0.2)
+    q = _rest(c)
+    names = list(c.joint_names)
+    c.set_estimate(0.0, names, np.zeros(c.n))
+    c.step(0.0, q, np.zeros(c.n))
+    _run(c, 0.0, 0.25)
+    assert c.safe_hold and "estimator lost" in c.safe_hold_reason
+    c.set_estimate(0.0, names, np.zeros(c.n))  # the old stamp again: not a new estimate
+    assert c.step(0.26, c.setpoints.q.copy(), np.zeros(c.n)).status == "safe_hold"
+    for k in range(20):  # the new estimator, 70 ms behind
+        t = 0.27 + 0.001 * k
+        c.set_estimate(t - 0.07, names, np.zeros(c.n))
+        out = c.step(t, c.setpoints.q.copy(), np.zeros(c.n))
+    assert not c.safe_hold and out.status == "estimate_stale"
+
+
 def test_bad_tolerances_are_refused(base):
     c = _ctl(base)
     q = _rest(c)

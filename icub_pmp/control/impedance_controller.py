@@ -20,7 +20,8 @@ Per step (one joint-state sample):
 
 Watchdogs: an estimate older than ``estimate_timeout`` (in the joint states' time) turns the
 torque loop off (feed-forward only); with the torque loop on, no estimate for
-``estimate_lost_timeout`` latches a safe hold until estimates are back; no joint state for
+``estimate_lost_timeout`` latches a safe hold until estimates are back (new estimates within
+half that timeout of the joint states, even if not yet fresh); no joint state for
 ``state_timeout`` (checked by :meth:`check_watchdog`, in the joint states' time) or for
 ``state_wall_timeout`` of wall time (the node calls :meth:`enter_safe_hold`) aborts every
 motion and latches a hold at the last measured posture until joint states are back. The
@@ -124,6 +125,7 @@ class ImpedanceController:
         self._saturated = np.zeros(self.n, dtype=bool)
         self._safe = False
         self._safe_kind = ""  # "state": released by a joint state; "estimate": by an estimate
+        self._lost_est_t = -math.inf  # stamp of the last estimate before the hold [s]
         self._safe_reason: str | None = None
         self._was_fresh = False
         self._goals: list[TrajectoryGoal] = []
@@ -296,6 +298,7 @@ class ImpedanceController:
         self._safe = True
         self._safe_kind = kind
         self._safe_reason = reason
+        self._lost_est_t = self._est_t if self._est_t is not None else -math.inf
         if self._t is not None:
             self.setpoints.hold(self._q)
             for g in self._goals:
@@ -388,8 +391,14 @@ class ImpedanceController:
             self._pid.reset()
         self._was_fresh = fresh
         if c.torque_loop and c.estimate_lost_timeout > 0 and self._est_t is not None:
-            if fresh and self._safe and self._safe_kind == "estimate":
-                self._safe = False  # estimates are back: motions may be commanded again
+            if (self._safe and self._safe_kind == "estimate" and self._est_t > self._lost_est_t
+                    and t - self._est_t <= 0.5 * c.estimate_lost_timeout):
+                # estimates are back: motions may be commanded again. Judged on estimates that
+                # arrive again (newer than the last before the hold) within half the loss
+                # timeout, not on `fresh`: a restarted estimator on a loaded machine may stay
+                # a little more than estimate_timeout behind for a while, and the hold would
+                # never release (the torque loop itself still runs only on fresh estimates)
+                self._safe = False
             elif (not fresh and not self._safe
                   and t - self._est_t > c.estimate_lost_timeout):
                 # takes effect from the next step (the set-point is held from now on)
