@@ -66,10 +66,20 @@ def old_event_definition(defs: MessageDefinitions, srv: str = "Reach") -> str:
 
 
 def _event(tau: float) -> Reach_Event:
+    """A request event whose sequences all hold one element: rclpy's serialize_message sizes
+    its buffer from Fast CDR's estimate, which counts alignment padding for empty sequences,
+    and returns the whole buffer; the trailing slack (bytes DDS never sends) makes rosbags'
+    strict size check fail. Recorded messages come off the wire with their exact length."""
+    from icub_interfaces.msg import Obstacle
+
     ev = Reach_Event()
     ev.info.event_type = ev.info.REQUEST_RECEIVED
     start = JointState(name=["r_elbow"], position=[0.5], velocity=[0.0], effort=[0.0])
-    ev.request.append(Reach.Request(hands=["right"], tau=tau, start_state=start))
+    ev.request.append(Reach.Request(
+        hands=["right"], tau=tau, start_state=start,
+        obstacles=[Obstacle(type="sphere", radius=0.05)], torque_limit_joints=["r_elbow"],
+        torque_limits=[1.0], frozen_joints=["r_wrist_prosup"],
+        admittance_scale_joints=["r_elbow"], admittance_scales=[1.0]))
     return ev
 
 
