@@ -184,7 +184,9 @@ def test_shipped_camera_intrinsics():
     """config/sim_bridge.yaml holds the Gazebo iCub's eye-camera intrinsics and a 1 ms step."""
     from icub_pmp.config import config_dir, load_params_file
 
-    cfg = SimConfig.from_dict(load_params_file(config_dir() / "sim_bridge.yaml", "sim_bridge"))
+    params = load_params_file(config_dir() / "sim_bridge.yaml", "sim_bridge")
+    # the realism.* parameters belong to RealismConfig (declared beside SimConfig by the node)
+    cfg = SimConfig.from_dict({k: v for k, v in params.items() if not k.startswith("realism.")})
     assert (cfg.camera_width, cfg.camera_height, cfg.camera_fx, cfg.camera_cx,
             cfg.camera_cy) == (320, 240, 343.12, 160.0, 120.0)
     assert cfg.timestep == 0.001
