@@ -9,9 +9,10 @@
 1. Fuzz: the graph of ``scripts/graph.sh`` (cameras off), every service, action and subscribed
    topic (icub_pmp.testing.graph_interfaces) over DDS with cases drawn from the types
    (icub_pmp.testing.message_fuzz); the controller's torques watched against the limits.
-2. Faults: the lockstep graph; each node killed in the middle of a reach, restarted, the next
-   reach goal executed (icub_pmp.testing.fault_injection); the table is printed.
-3. Soak: reach / squeeze / release / look cycles on the lockstep graph (+ gaze controller)
+2. Faults: the lockstep graph (full run: every node of the project, cameras on); each node
+   killed in the middle of a reach, restarted, the next reach goal executed
+   (icub_pmp.testing.fault_injection); the table is printed.
+3. Soak: reach / squeeze / release / look (/ vision in the full run) cycles on that graph
    (icub_pmp.testing.soak): RSS growth per process, loop-rate drift, warnings, goals answered.
 
 Ends with one JSON line: fuzz_cases, fuzz_crashes, fuzz_hangs, fuzz_unclear,
@@ -35,7 +36,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.testing import NodeGraph, RosProbe, reserve_domain_id, ros_environment  # noqa: E402
 from icub_pmp.testing import graph_interfaces as gi  # noqa: E402
-from icub_pmp.testing.fault_injection import FAULT_GRAPH, FAULT_PARAMS, FaultInjector, format_table  # noqa: E402
+from icub_pmp.testing.fault_injection import (  # noqa: E402
+    FAULT_GRAPH,
+    FAULT_PARAMS,
+    FULL_FAULT_GRAPH,
+    FULL_FAULT_PARAMS,
+    FaultInjector,
+    format_table,
+)
 from icub_pmp.testing.fuzz_tally import FuzzTally  # noqa: E402
 from icub_pmp.testing.interface_fuzzer import InterfaceFuzzer  # noqa: E402
 from icub_pmp.testing.soak import SoakRunner  # noqa: E402
@@ -75,13 +83,16 @@ def fuzz(probe: RosProbe, env: dict[str, str], scale: float) -> dict:
 
 
 def faults(probe: RosProbe, env: dict[str, str], quick: bool, soak_minutes: float) -> dict:
-    """Phases 2 and 3 on the lockstep graph (+ gaze controller for the soak's look)."""
+    """Phases 2 and 3 on the lockstep graph: with ``quick`` the reach path (+ gaze controller
+    for the soak's look), cameras off; else every node, cameras on (the soak's vision step)."""
     rows = []
-    plan = [(n, s) for n in FAULT_GRAPH for s in (signal.SIGKILL, signal.SIGTERM)]
+    nodes, params = FULL_FAULT_GRAPH, FULL_FAULT_PARAMS
+    plan = [(n, s) for n in nodes for s in (signal.SIGKILL, signal.SIGTERM)]
     if quick:  # each node once, the complement of the CI subset where it can be
+        nodes, params = FAULT_GRAPH + ["gaze_controller"], FAULT_PARAMS
         plan = [("sim_bridge", signal.SIGTERM), ("wrench_estimator", signal.SIGKILL),
                 ("impedance_controller", signal.SIGTERM), ("pmp_planner", signal.SIGKILL)]
-    with NodeGraph(FAULT_GRAPH + ["gaze_controller"], FAULT_PARAMS, env=env) as graph:
+    with NodeGraph(nodes, params, env=env) as graph:
         inj = FaultInjector(probe, graph)
         if not inj.wait_ready():
             raise RuntimeError(f"the lockstep graph did not come up\n{graph.outputs()}")

@@ -26,14 +26,34 @@ from typing import Any
 
 from icub_pmp.graph import NodeGraph
 from icub_pmp.ros.probe import RosProbe
+from icub_pmp.testing.graph_interfaces import PERIPERSONAL_FUZZ_MAPS
 
-__all__ = ["FaultInjector", "FaultOutcome", "FAULT_GRAPH", "FAULT_PARAMS", "format_table",
-           "reach_goal"]
+__all__ = ["FaultInjector", "FaultOutcome", "FAULT_GRAPH", "FAULT_PARAMS", "FULL_FAULT_GRAPH",
+           "FULL_FAULT_PARAMS", "format_table", "reach_goal"]
 
 #: the lockstep graph of the fault table (the simulator steps on the controller's commands)
 FAULT_GRAPH = ["sim_bridge", "wrench_estimator", "impedance_controller", "pmp_planner"]
 FAULT_PARAMS: dict[str, dict[str, object]] = {
     "sim_bridge": {"mode": "lockstep", "cameras_enabled": False},
+}
+#: every node of the project (bench/reliability.py's full matrix): the reach path above plus the
+#: nodes a user starts beside it; cameras on, so the soak's vision step has images (the Cartesian
+#: solver on the CasADi VM and the peripersonal maps grown small, as in the fuzz graph)
+FULL_FAULT_GRAPH = FAULT_GRAPH + ["gaze_controller", "cartesian_solver", "motion_segmenter",
+                                  "robot_state_publisher", "body_schema", "peripersonal_space"]
+FULL_FAULT_PARAMS: dict[str, dict[str, object]] = {
+    "sim_bridge": {"mode": "lockstep", "cameras_enabled": True},
+    "cartesian_solver": {"codegen": False},
+    "peripersonal_space": {"maps_dir": str(PERIPERSONAL_FUZZ_MAPS), "grow_if_missing": True,
+                           "babble_samples": 2000},
+}
+#: a node without a key topic serves again once a request to its service is answered
+#: (after a SIGKILL the dead server stays matched until its DDS lease expires)
+READY_SERVICE = {
+    "gaze_controller": "/gaze/set_tracking",
+    "cartesian_solver": "/cartesian/solve_pose",
+    "peripersonal_space": "/peripersonal/check_reach",
+    "body_schema": "/body_schema/stop_babbling",
 }
 #: two targets the reaches alternate between (right hand, root_link [m])
 TARGETS = ([-0.30, 0.17, 0.02], [-0.26, 0.12, 0.10])
@@ -166,7 +186,34 @@ class FaultInjector:
             # restarted process must also have said that it serves
             return (self.client.server_is_ready()
                     and "serving /pmp/reach" in self.graph.procs[node].output())
-        return f"/{node}" in self.probe.node_names()  # any other node: on the graph
+        if node in READY_SERVICE:
+            return self._answers(node)
+        # any other node: on the graph, and the running process has logged its start-up line
+        return (f"/{node}" in self.probe.node_names()
+                and "[INFO]" in self.graph.procs[node].output())
+
+    def _answers(self, node: str) -> bool:
+        """True when ``node``'s :data:`READY_SERVICE` answers a good request within 10 s."""
+        from geometry_msgs.msg import Point
+        from std_srvs.srv import SetBool, Trigger
+
+        from icub_interfaces.srv import CheckReach, SolvePose
+        from icub_pmp.testing.graph_interfaces import good_solve_pose
+
+        name = READY_SERVICE[node]
+        if node == "gaze_controller":
+            srv, req = SetBool, SetBool.Request(data=False)
+        elif node == "cartesian_solver":
+            srv, req = SolvePose, good_solve_pose()
+        elif node == "peripersonal_space":
+            srv, req = CheckReach, CheckReach.Request(points=[Point(x=-0.3, y=0.15, z=0.05)])
+        else:
+            srv, req = Trigger, Trigger.Request()
+        try:
+            self.probe.call(name, srv, req, timeout=10.0)
+        except TimeoutError:
+            return False
+        return True
 
     def wait_ready(self, timeout: float | None = None) -> bool:
         """Wait until every node of the graph serves."""

@@ -8,20 +8,32 @@ for a loaded two-core machine: a request not answered within its budget counts a
 from __future__ import annotations
 
 import dataclasses
+import os
+import tempfile
+from pathlib import Path
 from typing import Any
 
-__all__ = ["FuzzTarget", "FUZZ_GRAPH", "FUZZ_PARAMS", "services", "actions", "topics",
-           "effort_topic", "good_reach", "good_solve_pose", "good_look_at", "fuzz_services",
-           "fuzz_actions", "fuzz_topics", "fuzz_effort"]
+__all__ = ["FuzzTarget", "FUZZ_GRAPH", "FUZZ_PARAMS", "PERIPERSONAL_FUZZ_MAPS", "services",
+           "actions", "topics", "effort_topic", "good_reach", "good_solve_pose", "good_look_at",
+           "fuzz_services", "fuzz_actions", "fuzz_topics", "fuzz_effort"]
 
 #: the nodes fuzzed, started as scripts/graph.sh starts them, except: cameras off (images are
 #: fuzzed) and the Cartesian solver on the CasADi VM (``codegen: false``: a fuzzed request on a
 #: chain not prebuilt would otherwise compile its NLP with gcc inside the service call, minutes
 #: on a fresh, loaded machine; docs/decisions/0045-fuzzing-derived-from-the-types.md)
+#: ... plus the nodes a user starts beside it: the robot state publisher, the body schema
+#: (babbling) and the peripersonal space (its maps grown small, once, in a scratch folder:
+#: :data:`PERIPERSONAL_FUZZ_MAPS`).
 FUZZ_GRAPH = ["sim_bridge", "wrench_estimator", "impedance_controller", "pmp_planner",
-              "cartesian_solver", "gaze_controller", "motion_segmenter"]
-FUZZ_PARAMS: dict[str, dict[str, object]] = {"sim_bridge": {"cameras_enabled": False},
-                                             "cartesian_solver": {"codegen": False}}
+              "cartesian_solver", "gaze_controller", "motion_segmenter",
+              "robot_state_publisher", "body_schema", "peripersonal_space"]
+PERIPERSONAL_FUZZ_MAPS = Path(tempfile.gettempdir()) / f"icub_pmp_fuzz_peripersonal_{os.getuid()}"
+FUZZ_PARAMS: dict[str, dict[str, object]] = {
+    "sim_bridge": {"cameras_enabled": False},
+    "cartesian_solver": {"codegen": False},
+    "peripersonal_space": {"maps_dir": str(PERIPERSONAL_FUZZ_MAPS), "grow_if_missing": True,
+                           "babble_samples": 2000},
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,13 +53,18 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
     from std_srvs.srv import SetBool, Trigger
 
     from icub_interfaces.srv import (
+        AllocateObjects,
         ApplyWrench,
+        CheckReach,
+        FindEmptyArea,
         GoToPose,
         LookAt,
+        PlanPair,
         Reach,
         ResetSim,
         SetObjectPose,
         SolvePose,
+        StartBabbling,
     )
 
     def n(k: int) -> int:
@@ -65,6 +82,18 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
         FuzzTarget("/cartesian/go_to_pose", GoToPose, ("cartesian_solver",), 20.0, n(10)),
         FuzzTarget("/gaze/look_at", LookAt, ("gaze_controller",), 45.0, n(10)),
         FuzzTarget("/gaze/set_tracking", SetBool, ("gaze_controller",), 10.0, n(4)),
+        FuzzTarget("/peripersonal/check_reach", CheckReach, ("peripersonal_space",), 15.0,
+                   n(10)),
+        FuzzTarget("/peripersonal/allocate", AllocateObjects, ("peripersonal_space",), 15.0,
+                   n(10)),
+        FuzzTarget("/peripersonal/empty_area", FindEmptyArea, ("peripersonal_space",), 15.0,
+                   n(10)),
+        FuzzTarget("/peripersonal/plan_pair", PlanPair, ("peripersonal_space",), 30.0, n(8)),
+        FuzzTarget("/peripersonal/reload", Trigger, ("peripersonal_space",), 30.0, n(2)),
+        # babbling last among the services: an accepted request moves the arm until the
+        # stop requests that follow
+        FuzzTarget("/body_schema/start_babbling", StartBabbling, ("body_schema",), 10.0, n(8)),
+        FuzzTarget("/body_schema/stop_babbling", Trigger, ("body_schema",), 10.0, n(3)),
     ]
 
 
@@ -91,11 +120,13 @@ def topics(scale: float = 1.0) -> list[FuzzTarget]:
     from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
     from trajectory_msgs.msg import JointTrajectory
 
+    from icub_interfaces.msg import Obstacles
+
     def n(k: int) -> int:
         return max(1, int(round(k * scale)))
 
     every_js = ("wrench_estimator", "impedance_controller", "pmp_planner", "cartesian_solver",
-                "gaze_controller", "motion_segmenter")
+                "gaze_controller", "motion_segmenter", "robot_state_publisher", "body_schema")
     return [
         FuzzTarget("/joint_states", JointState, every_js, cases=n(40)),
         FuzzTarget("/estimated_joint_torques", JointState, ("impedance_controller",),
@@ -106,8 +137,11 @@ def topics(scale: float = 1.0) -> list[FuzzTarget]:
                    ("impedance_controller",), cases=n(20)),
         FuzzTarget("/ft/r_arm_ft_sensor", WrenchStamped, ("wrench_estimator",), cases=n(20)),
         FuzzTarget("/imu", Imu, ("wrench_estimator",), cases=n(20)),
-        FuzzTarget("/cam/left/image_raw", Image, ("motion_segmenter",), cases=n(20)),
-        FuzzTarget("/cam/right/camera_info", CameraInfo, ("motion_segmenter",), cases=n(15)),
+        FuzzTarget("/cam/left/image_raw", Image, ("motion_segmenter", "body_schema"),
+                   cases=n(20)),
+        FuzzTarget("/cam/right/camera_info", CameraInfo, ("motion_segmenter", "body_schema"),
+                   cases=n(15)),
+        FuzzTarget("/pmp/obstacles", Obstacles, ("pmp_planner",), cases=n(15)),
         FuzzTarget("/motion/target", PointStamped, ("gaze_controller",), cases=n(15)),
     ]
 

@@ -4,8 +4,11 @@ each process's resident memory, the 1 kHz loop's rate and the warnings sampled p
 
 One cycle: a reach goal (``/pmp/reach_action``, executed), a squeeze (``/sim/apply_wrench``: a
 scripted push on the right hand, as an object squeezed against it would), a release (the push
-ends; the controller holds), and a gaze ``/gaze/look_at`` of the table (when the gaze
-controller runs). Every goal and call must be answered.
+ends; the controller holds), a gaze ``/gaze/look_at`` of the table (when the gaze
+controller runs) and, when the motion segmenter runs on the simulator's cameras, a vision step:
+the cylinder is moved across the table on the robot's left (away from the reaches) and the
+segmenter must give a still stereo target of it (``/motion/target/estimate``) after it stops.
+Every goal and call must be answered.
 
 Figures: RSS growth per process [MB/h] (least-squares slope over the samples after the first
 cycle), the loop rate [simulated steps per wall second, 1 kHz steps] in the first and the last
@@ -65,6 +68,8 @@ class SoakReport:
     loop_rate_last: float
     warnings_first: float
     warnings_last: float
+    vision_tried: int = 0
+    vision_found: int = 0
 
     @property
     def loop_rate_drift_pct(self) -> float:
@@ -89,12 +94,13 @@ class SoakReport:
             "loop_rate_drift_pct": round(self.loop_rate_drift_pct, 1),
             "warnings_per_cycle_first": round(self.warnings_first, 2),
             "warnings_per_cycle_last": round(self.warnings_last, 2),
+            "soak_vision_steps": self.vision_tried, "soak_vision_found": self.vision_found,
         }
 
 
 class SoakRunner:
     """Cycles on ``graph`` (lockstep: sim_bridge, wrench_estimator, impedance_controller,
-    pmp_planner, optionally gaze_controller) through ``probe``."""
+    pmp_planner, optionally gaze_controller and motion_segmenter) through ``probe``."""
 
     def __init__(self, probe: RosProbe, graph: NodeGraph, reach_client: Any):
         from rclpy.qos import qos_profile_sensor_data
@@ -104,8 +110,15 @@ class SoakRunner:
         self.graph = graph
         self.client = reach_client
         self.sim_time = 0.0
+        self.estimates: list[Any] = []
+        self.vision = [0, 0]  # vision steps tried, still targets found
         probe.node.create_subscription(Clock, "/clock", self._on_clock,
                                        qos_profile_sensor_data)
+        if "motion_segmenter" in graph.procs:
+            from icub_interfaces.msg import VisualTarget
+
+            probe.node.create_subscription(VisualTarget, "/motion/target/estimate",
+                                           self.estimates.append, 10)
 
     def _on_clock(self, m: Any) -> None:
         self.sim_time = m.clock.sec + m.clock.nanosec * 1e-9
@@ -145,7 +158,52 @@ class SoakRunner:
             r = self._call("/gaze/look_at", LookAt, good_look_at())
             answered += r is not None
             ok += bool(r)
+        if "motion_segmenter" in self.graph.procs and \
+                self.probe.node.count_publishers("/cam/left/image_raw") > 0:
+            sent += 1
+            r = self.vision_step()
+            self.vision[0] += 1
+            self.vision[1] += bool(r)
+            answered += r is not None
+            ok += bool(r)
         return sent, answered, ok
+
+    def vision_step(self, start: tuple[float, float, float] = (-0.36, 0.0, -0.03),
+                    speed_y: float = -0.15, duration: float = 1.2) -> bool | None:
+        """Move the cylinder from ``start`` [m, root_link] along y at ``speed_y`` [m/s] for
+        ``duration`` [s] (60 poses per second of simulated time), then wait up to 3 s of
+        simulated time for a still target stamped after the motion began. True = found,
+        False = none, None = a pose call not answered."""
+        from geometry_msgs.msg import Pose
+
+        from icub_interfaces.srv import SetObjectPose
+
+        def place(y: float) -> bool | None:
+            req = SetObjectPose.Request(name="cylinder", pose=Pose())
+            req.pose.position.x, req.pose.position.y, req.pose.position.z = start[0], y, start[2]
+            req.pose.orientation.w = 1.0
+            return self._call("/sim/set_object_pose", SetObjectPose, req)
+
+        if place(start[1]) is None:
+            return None
+        settle = self.sim_time + 0.3
+        self.probe.wait_for(lambda: self.sim_time >= settle, 60.0)
+        self.estimates.clear()
+        t0 = self.sim_time
+        for k in range(int(duration * 60.0) + 1):
+            if place(start[1] + speed_y * k / 60.0) is None:
+                return None
+            t_next = t0 + (k + 1) / 60.0
+            self.probe.wait_for(lambda t_next=t_next: self.sim_time >= t_next, 60.0)
+        end = self.sim_time + 3.0
+
+        def still() -> bool:
+            return any(m.state == "still" and m.points > 0
+                       and m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 > t0
+                       for m in list(self.estimates))
+
+        self.probe.wait_for(lambda: still() or self.sim_time >= end, 120.0)
+        return still()
 
     def run(self, minutes: float) -> SoakReport:
         """Cycles for ``minutes`` of wall time (at least two)."""
@@ -185,4 +243,5 @@ class SoakRunner:
             loop_rate_first=float(np.median(rates[:third])),
             loop_rate_last=float(np.median(rates[-third:])),
             warnings_first=float(np.mean(warns[:third])),
-            warnings_last=float(np.mean(warns[-third:])))
+            warnings_last=float(np.mean(warns[-third:])),
+            vision_tried=self.vision[0], vision_found=self.vision[1])
