@@ -167,3 +167,21 @@ def test_simulator_killed_mid_motion_aborts_the_goal_with_the_reason(everyday):
     r = res.result
     assert not r.success and r.outcome == "aborted", (res.status, r.message, proc.output()[-4000:])
     assert "simulator" in r.message and ("paused or gone" in r.message), r.message
+
+
+def test_the_foxglove_layout_shows_topics_the_graph_publishes(everyday):
+    """config/foxglove/demo.json names only topics the everyday graph publishes (the
+    peripersonal maps come from a node started on its own)."""
+    from icub_pmp.bags.foxglove_layout import layout_topics
+
+    _, probe, _, _ = everyday
+    wanted = layout_topics() - {"/peripersonal/maps"}
+    assert {"/robot_description", "/cam/left/image_raw", "/ft/r_arm_ft",
+            "/pmp/predicted_path/right_hand"} <= wanted
+
+    def published() -> set[str]:
+        return {name for name, _ in probe.node.get_topic_names_and_types()
+                if probe.node.count_publishers(name) > 0}
+
+    probe.wait_for(lambda: wanted <= published(), 60.0)
+    assert wanted <= published(), sorted(wanted - published())
