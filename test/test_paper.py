@@ -91,8 +91,23 @@ def test_force_rows_say_which_simulator_they_ran_on(results):
     the ideal one, until SimConfig has a 'realism' field)."""
     from icub_pmp.paper.force_experiments import realism_note
 
-    for name in ("force_table1_ft_prediction", "force_fig6_7_rfrr_vs_krr"):
+    for name in ("force_table1_ft_prediction", "force_fig6_7_rfrr_vs_krr",
+                 "force_table2_jerk"):
         assert realism_note() in results[name].verdict
+
+
+def test_table2_reaches_are_executed_and_min_jerk_is_the_smoothest(results):
+    """Table 2 at a tiny size: every controller's reaches end within 1 cm of the asked pose
+    on the imperfect robot, and the min-jerk controller's hand path has the lowest jerk (the
+    paper's claim), with both paper figures."""
+    r = results["force_table2_jerk"]
+    by = {m.quantity: m for m in r.measured}
+    for c in ("min-jerk", "VITE", "DLS"):
+        assert by[f"{c} position error [mm]"].mean < 10.0, by
+        assert by[f"{c} position error [mm]"].n == 2
+    assert by["min-jerk's jerk lower than VITE's by [-]"].mean > 0
+    assert by["min-jerk's jerk lower than DLS's by [-]"].mean > 0
+    assert len(r.figures) == 2
 
 
 def test_body_model_row_waits_for_the_body_schema_package(results):

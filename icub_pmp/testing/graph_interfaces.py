@@ -197,10 +197,16 @@ def good_look_at() -> Any:
 # ---------------------------------------------------------------------- the fuzzing phases
 # (the test runs them one per test function, bench/reliability.py all in a row)
 def fuzz_services(fuzzer: Any, scale: float = 1.0) -> list[str]:
-    """Every service fuzzed; returns their names."""
+    """Every service fuzzed; returns their names. The graph is left as found: the simulator
+    running (a drawn /sim/set_paused may have paused it) and no babbling."""
+    from std_srvs.srv import SetBool, Trigger
+
     targets = services(scale)
     for t in targets:
         fuzzer.fuzz_service(t.name, t.type, t.nodes[0], t.budget, t.cases)
+    fuzzer.probe.call("/sim/set_paused", SetBool, SetBool.Request(data=False), 30.0)
+    if "body_schema" in fuzzer.graph.procs:
+        fuzzer.probe.call("/body_schema/stop_babbling", Trigger, Trigger.Request(), 30.0)
     return [t.name for t in targets]
 
 
