@@ -99,6 +99,15 @@ class MinJerkGenerator:
         self._x_target = pose.translation.copy()
         self._R_target = pose.rotation.copy()
 
+    def feed_back(self, q_measured: np.ndarray) -> None:
+        """Replace the generator's joint state by the measured chain joints (n,) [rad] (the
+        encoders, ``q_fb`` of the reaching paper's Fig 8): the next :meth:`step` plans from
+        where the arm is, not from where the plan was (feedback generation, Sect. 4)."""
+        q = np.asarray(q_measured, dtype=float).reshape(-1)
+        if q.shape != self.q.shape or not np.all(np.isfinite(q)):
+            raise InvalidInput(f"q_measured: expected {self.q.size} finite values")
+        self.q = np.clip(q, self._lo, self._hi)
+
     # ------------------------------------------------------------------ kinematics
     def _full(self, q: np.ndarray) -> np.ndarray:
         qf = self._q_full.copy()

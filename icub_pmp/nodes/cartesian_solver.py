@@ -12,7 +12,11 @@ Services
 Action ``/cartesian/go_to_pose_action`` (icub_interfaces/action/GoToPose): the same plan,
 executed through the impedance controller's FollowJointTrajectory action, with feedback (the
 hand's distance to the target measured from /joint_states) and a result measured on the robot
-after the hand settled (:class:`~icub_pmp.ros.goal_execution.GoalExecution`). The service
+after the hand settled (:class:`~icub_pmp.ros.goal_execution.GoalExecution`). With
+``execution: closed_loop`` the action runs the generator fed back with the measured joints
+every period (the cartesianController's scheme, Fig 8 of the reaching paper:
+:class:`~icub_pmp.cartesian.min_jerk_velocity_law.MinJerkVelocityLaw`) and sends joint
+velocities on ``/impedance_controller/velocity_command`` instead. The service
 answers "sent", never "reached". Trajectories faster than the joints' velocity/acceleration
 limits (config/robot.yaml) are slowed down to them, and the answer says so.
 
@@ -48,6 +52,7 @@ from icub_pmp.cartesian import (
     KinematicChain,
     MinJerkConfig,
 )
+from icub_pmp.cartesian.min_jerk_velocity_law import MinJerkVelocityLaw
 from icub_pmp.control.arrival_monitor import ArrivalConfig
 from icub_pmp.control.trajectory_limits import JointRateLimits
 from icub_pmp.errors import IcubPmpError, InvalidInput, UnknownName
@@ -206,7 +211,7 @@ class CartesianSolverNode(Node):
         return resp
 
     def _go_to_pose(self, req: GoToPose.Request, resp: GoToPose.Response) -> None:
-        msg, note = self._plan_go_to_pose(req, resp, self._start_state(req.start_state))
+        msg, note, _ = self._plan_go_to_pose(req, resp, self._start_state(req.start_state))
         if msg is None:
             return
         wait = self.node_config.subscriber_timeout
@@ -218,9 +223,9 @@ class CartesianSolverNode(Node):
                         + listening)
 
     def _plan_go_to_pose(self, req: Any, resp: Any, start_state: dict[str, float] | None
-                         ) -> tuple[JointTrajectory | None, str]:
+                         ) -> tuple[JointTrajectory | None, str, Any]:
         """Solve and roll out (:class:`CartesianController`), fill ``resp`` with the solution:
-        (the trajectory message, or None when the solve failed; the message)."""
+        (the trajectory message, or None when the solve failed; the message; the motion)."""
         self.controller.trajectory_time(req.trajectory_time)  # checked before the target
         chain, position, rotation = self._target(req)
         now = self.get_clock().now()
@@ -231,13 +236,13 @@ class CartesianSolverNode(Node):
         self._fill(resp, motion.solution)
         traj = motion.trajectory
         if traj is None:
-            return None, motion.solution.message
+            return None, motion.solution.message, motion
         msg = arrays_to_trajectory(traj.joint_names, traj.t, traj.q, traj.qd, stamp=now.to_msg())
         note = (f"{motion.solution.message}; trajectory of {len(traj.t)} points over "
                 f"{traj.duration:.2f} s"
                 + (" (continued from the running one)" if motion.continued else "")
                 + (f"; {motion.slowdown}" if motion.slowdown else ""))
-        return msg, note
+        return msg, note, motion
 
     # ------------------------------------------------------------------ the action
     def _hands(self, st: MeasuredState) -> dict[str, np.ndarray]:
@@ -270,7 +275,7 @@ class CartesianSolverNode(Node):
             chain, position, _ = self._target(req)
             hand = "left" if "left" in chain else "right"
             solved = GoToPose.Response()
-            msg, note = self._plan_go_to_pose(req, solved, None)
+            msg, note, motion = self._plan_go_to_pose(req, solved, None)
         except IcubPmpError as exc:
             return finish("rejected", str(exc))
         except Exception as exc:  # never die on a goal
@@ -283,15 +288,39 @@ class CartesianSolverNode(Node):
         res.trajectory_time_used = float(msg.points[-1].time_from_start.sec
                                          + msg.points[-1].time_from_start.nanosec * 1e-9)
         msg.header.stamp.sec, msg.header.stamp.nanosec = 0, 0  # start when accepted
-        out = await self.execution.run(
-            msg, {hand: position}, arrival, feedback, lambda: handle.is_cancel_requested,
-            generation)
+        if self.node_config.execution == "closed_loop":
+            out = await self._execute_closed_loop(motion, hand, position, arrival, feedback,
+                                                  handle, generation)
+        else:
+            out = await self.execution.run(
+                msg, {hand: position}, arrival, feedback, lambda: handle.is_cancel_requested,
+                generation)
         if out.arrival is not None:
             p = out.arrival.positions[hand]
             res.arrival_position_error = float(out.arrival.errors[hand])
             res.final_position = Point(x=float(p[0]), y=float(p[1]), z=float(p[2]))
         res.execution_time = float(out.execution_time)
         return finish(out.outcome, f"{out.message} (solver: {note})")
+
+
+    async def _execute_closed_loop(self, motion: Any, hand: str, position: np.ndarray,
+                                   arrival: Any, feedback: Any, handle: Any, generation: int
+                                   ) -> Any:
+        """The min-jerk generator fed back with the measured joints every period, its joint
+        velocities to the controller's velocity mode (``execution: closed_loop``); T is the
+        goal's, stretched as the planned trajectory was to the joint rate limits."""
+        chain = self.controller.solver.problem(motion.solution.chain).chain
+        T = self.controller.trajectory_time(handle.request.trajectory_time) * motion.time_scale
+        law = MinJerkVelocityLaw(self.model, chain, self.mj_config, T)
+        rest = self.model.posture("rest")
+
+        def configuration(st: MeasuredState) -> np.ndarray:
+            return self.model.q_from_dict(st.positions, default=rest)
+
+        law.start(configuration(self.joint_cache.latest()), motion.solution.q)
+        return await self.execution.run_closed_loop(
+            law, configuration, motion.trajectory.duration, {hand: position}, arrival,
+            feedback, lambda: handle.is_cancel_requested, generation)
 
 
 def _check_rest_posture(configs: tuple) -> None:

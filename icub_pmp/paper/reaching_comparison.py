@@ -42,6 +42,7 @@ import pinocchio as pin
 from icub_pmp.cartesian.kinematic_chain import KinematicChain
 from icub_pmp.cartesian.min_jerk_config import MinJerkConfig
 from icub_pmp.cartesian.min_jerk_generator import MinJerkGenerator
+from icub_pmp.cartesian.min_jerk_velocity_law import MinJerkVelocityLaw
 from icub_pmp.cartesian.vite_filter import ViteFilter
 from icub_pmp.control.impedance_controller_config import ImpedanceControllerConfig
 from icub_pmp.kinematics.robot_model import IcubModel
@@ -72,21 +73,12 @@ class VelocityLaw(Protocol):
         """The chain's joint velocities (n,) [rad/s] for the measured configuration."""
 
 
-class MinJerkLaw:
+class MinJerkLaw(MinJerkVelocityLaw):
     """The feedback multi-referential minimum-jerk generator (module doc)."""
 
     def __init__(self, model: IcubModel, chain: KinematicChain, T: float = 2.0,
                  Ts: float = 0.01):
-        self.gen = MinJerkGenerator(model, chain, MinJerkConfig(trajectory_time=T, period=Ts))
-        self.idx = model.indices(chain.joints)
-
-    def start(self, q_full: np.ndarray, q_d: np.ndarray) -> None:
-        self.gen.reset(q_full)
-        self.gen.set_target(q_d)
-
-    def command(self, q_full: np.ndarray) -> np.ndarray:
-        self.gen.q = np.clip(q_full[self.idx], self.gen._lo, self.gen._hi)  # q_fb (Fig 8)
-        return self.gen.step()
+        super().__init__(model, chain, MinJerkConfig(trajectory_time=T, period=Ts))
 
 
 class ViteLaw:

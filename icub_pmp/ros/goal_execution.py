@@ -15,6 +15,12 @@ coroutine, awaited from an action server's execute callback):
    (:class:`~icub_pmp.control.arrival_monitor.ArrivalMonitor`) and judges the arrival on the
    measured hands.
 
+:meth:`run_closed_loop` executes instead with a velocity law closed on the measured joints
+(the cartesianController's way, :class:`~icub_pmp.cartesian.min_jerk_velocity_law.
+MinJerkVelocityLaw`): a timer on the node's clock (simulated time) runs the law every period
+and publishes the joint velocities on ``/impedance_controller/velocity_command`` (eq 7) until
+the hands have settled, then the arrival is judged the same way.
+
 Everything runs on the node's executor thread: waiting is done by awaiting futures that a
 wall-clock timer completes (no blocking, no extra threads).
 """
@@ -24,13 +30,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Callable, Mapping, NamedTuple
+from typing import Callable, Mapping, NamedTuple, Protocol
 
 import numpy as np
 from rclpy.action import ActionClient
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.task import Future
+from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from icub_interfaces.action import FollowJointTrajectory
@@ -39,11 +46,13 @@ from icub_pmp.control.trajectory_goal import GoalCode
 from icub_pmp.errors import InvalidInput
 from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 
-__all__ = ["GoalExecution", "ExecutionOutcome", "CONTROLLER_ACTION", "end_goal",
-           "arrival_config"]
+__all__ = ["GoalExecution", "ExecutionOutcome", "CONTROLLER_ACTION", "VELOCITY_TOPIC",
+           "VelocityLaw", "end_goal", "arrival_config"]
 
 #: the impedance controller's trajectory-execution action
 CONTROLLER_ACTION = "/impedance_controller/follow_joint_trajectory"
+#: the impedance controller's velocity-mode input (eq 7)
+VELOCITY_TOPIC = "/impedance_controller/velocity_command"
 
 _CODE_NAMES = {v: k for k, v in vars(GoalCode).items() if isinstance(v, int)}
 
@@ -65,6 +74,18 @@ class ExecutionOutcome(NamedTuple):
 
 FeedbackFn = Callable[[str, Mapping[str, float], float, float], None]
 HandsFn = Callable[[MeasuredState], Mapping[str, np.ndarray]]
+#: measured state -> the full model configuration (nq,) [rad]
+ConfigurationFn = Callable[[MeasuredState], np.ndarray]
+
+
+class VelocityLaw(Protocol):
+    """What :meth:`GoalExecution.run_closed_loop` runs: ``period`` [s], ``joint_names``,
+    ``command(q_full) -> (n,) joint velocities [rad/s]``."""
+
+    period: float
+    joint_names: tuple[str, ...]
+
+    def command(self, q_full: np.ndarray) -> np.ndarray: ...
 
 
 class GoalExecution:
@@ -90,6 +111,11 @@ class GoalExecution:
                                    callback_group=callback_group)
         self._ticks: list[Future] = []
         self._generation = 0
+        self._callback_group = callback_group
+        self._law: tuple[VelocityLaw, ConfigurationFn] | None = None
+        self._law_timer = None
+        self._velocity_pub = None
+        self.law_steps = 0  # periods the running law has commanded
         node.create_timer(0.02, self._on_tick, callback_group=callback_group,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
 
@@ -224,6 +250,109 @@ class GoalExecution:
         return ExecutionOutcome(
             "not_reached", f"not reached: measured arrival error {errs} (tolerance "
             f"{arrival.arrival_tolerance * 1e3:.1f} mm){extra}", verdict, elapsed)
+
+    # ------------------------------------------------------------------ closed loop
+    def _on_law_period(self) -> None:
+        """One period of the running velocity law (timer on the node's clock)."""
+        if self._law is None:
+            return
+        law, configuration = self._law
+        st = self.joint_states.latest()
+        if st is None:
+            return
+        try:
+            qd = law.command(configuration(st))
+        except Exception as exc:  # a law that fails stops: the controller holds
+            self.node.get_logger().error(f"velocity law stopped: {exc!r}")
+            self._stop_law()
+            return
+        self._publish_velocity(law.joint_names, qd)
+        self.law_steps += 1
+
+    def _publish_velocity(self, names: tuple[str, ...], qd: np.ndarray) -> None:
+        msg = JointState()
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        msg.name = list(names)
+        msg.velocity = [float(v) for v in qd]
+        self._velocity_pub.publish(msg)
+
+    def _stop_law(self) -> None:
+        """Stop commanding: zero velocities once (the controller holds its set-point)."""
+        if self._law is not None:
+            law = self._law[0]
+            self._law = None
+            self._publish_velocity(law.joint_names, np.zeros(len(law.joint_names)))
+
+    async def run_closed_loop(self, law: VelocityLaw, configuration: ConfigurationFn,
+                              duration: float, targets: Mapping[str, np.ndarray],
+                              arrival: ArrivalConfig, feedback: FeedbackFn,
+                              cancel_requested: Callable[[], bool],
+                              generation: int) -> ExecutionOutcome:
+        """Run ``law`` (started by the caller) every ``law.period`` s of the node's clock on
+        the measured joints (``configuration`` maps a measured state to the model's q) until
+        the hands of ``targets`` have settled after ``duration`` [s], then judge the arrival
+        (module doc). Cancel and preemption stop the law at once (the arm holds)."""
+        if self._velocity_pub is None:
+            self._velocity_pub = self.node.create_publisher(JointState, VELOCITY_TOPIC, 10)
+        if self._law_timer is None or self._law_timer.timer_period_ns != int(law.period * 1e9):
+            if self._law_timer is not None:
+                self.node.destroy_timer(self._law_timer)
+            self._law_timer = self.node.create_timer(
+                law.period, self._on_law_period, callback_group=self._callback_group)
+        start_wall = time.monotonic()
+        while self._velocity_pub.get_subscription_count() == 0:
+            if time.monotonic() - start_wall > self.server_timeout:
+                return ExecutionOutcome(
+                    "aborted", f"nobody subscribes to {VELOCITY_TOPIC} after "
+                    f"{self.server_timeout:g} s (is impedance_controller running?)", None, 0.0)
+            await self.sleep()
+        monitor = ArrivalMonitor(targets, arrival)
+        t0 = self._sim_now()
+        if t0 is None:
+            return ExecutionOutcome("aborted", "no /joint_states: the posture is unknown",
+                                    None, 0.0)
+        monitor.set_end(t0 + duration)
+        self.law_steps = 0
+        self._law = (law, configuration)
+        last_fb = 0.0
+        try:
+            while True:
+                st = self._observe(monitor)
+                if cancel_requested():
+                    return ExecutionOutcome("canceled", "canceled: the arms hold where they "
+                                            "are", self._judge_now(monitor), st.t - t0)
+                if generation != self._generation:
+                    return ExecutionOutcome("aborted", "preempted by a new goal", None,
+                                            st.t - t0)
+                if self.joint_states.wall_age() > self.stale_timeout:
+                    return ExecutionOutcome(
+                        "aborted", f"no /joint_states for {self.stale_timeout:g} s of wall "
+                        "time (simulator paused or gone)", self._judge_now(monitor),
+                        st.t - t0)
+                if monitor.settled():
+                    break
+                now = time.monotonic()
+                if now - last_fb >= self.feedback_period:
+                    last_fb = now
+                    elapsed = st.t - t0
+                    feedback("executing" if elapsed < duration else "settling",
+                             monitor.errors, max(0.0, duration - elapsed),
+                             min(1.0, elapsed / duration) if duration > 0 else 1.0)
+                await self.sleep()
+        finally:
+            if self._law is not None and self._law[0] is law:
+                self._stop_law()
+        verdict = monitor.judge()
+        t_fin = self._sim_now()
+        elapsed = t_fin - t0 if t_fin is not None else duration
+        errs = ", ".join(f"{h} {e * 1e3:.1f} mm" for h, e in verdict.errors.items())
+        if verdict.reached:
+            return ExecutionOutcome("reached", f"reached: measured arrival error {errs} "
+                                    f"(closed loop, {self.law_steps} velocity commands)",
+                                    verdict, elapsed)
+        return ExecutionOutcome(
+            "not_reached", f"not reached: measured arrival error {errs} (tolerance "
+            f"{arrival.arrival_tolerance * 1e3:.1f} mm, closed loop)", verdict, elapsed)
 
     # ------------------------------------------------------------------ helpers
     def _sim_now(self) -> float | None:
