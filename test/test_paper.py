@@ -41,7 +41,8 @@ def test_registry_holds_every_paper_in_report_order():
                  "pmp_fig7_trunk", "pmp_fig8_transport", "pmp_sect4_unreachable",
                  "pmp_eq4a_basic_vs_default", "force_table1_ft_prediction",
                  "force_fig6_7_rfrr_vs_krr", "force_fig11_motioncut_heldout",
-                 "body_schema_model_rmse", "body_schema_gng_map"):
+                 "body_schema_model_rmse", "body_schema_gng_map", "body_schema_reward_field",
+                 "force_table2_jerk"):
         assert must in names
     assert names[0].startswith("pmp_") and names[-1].startswith("body_schema_")
     for e in EXPERIMENTS:
@@ -169,3 +170,13 @@ def test_command_line_writes_a_timestamped_report(tmp_path):
     bad = subprocess.run(cmd + ["--only", "fig99"], cwd=ROOT, capture_output=True, text=True,
                          timeout=120)
     assert bad.returncode == 2 and "pmp_fig2_joint_limits" in bad.stderr
+
+
+def test_reward_fields_send_each_arm_to_its_own_side_first(results):
+    """Fig 4 at a tiny size: each arm's reward peaks outside the shared workspace and the
+    allocation is as parallel as every scene allows."""
+    r = results["body_schema_reward_field"]
+    assert r.status == "reproduced", r.verdict
+    by = {m.quantity: m for m in r.measured}
+    assert by["fewest possible rounds / rounds [-]"].mean >= 0.99
+    assert by["sequences with the own side first [fraction]"].mean >= 0.9
