@@ -57,6 +57,12 @@ from icub_pmp.peripersonal import (  # noqa: E402
 )
 from icub_pmp.peripersonal.peripersonal_space import map_file  # noqa: E402
 from icub_sim_bridge import SimConfig  # noqa: E402
+from icub_sim_bridge.harness.arm_pair_execution import (  # noqa: E402
+    PAIR_Z_MIN,
+    execute_pair,
+    recall_precision,
+    shared_target_pairs,
+)
 from icub_sim_bridge.harness.sim_loop import SimLoop  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -64,7 +70,7 @@ PAPER_NEURONS = {"left": 478, "right": 476}  # TX and RX robots' maps (Bhat and 
 PAPER_BABBLES = 10_000
 BABBLE_SEED = {"left": 11, "right": 12}
 HELD_OUT_SEED = {"left": 21, "right": 22}
-Z_MIN = -0.03  # lowest target [m]: 6 cm above the table top (z = -0.09)
+Z_MIN = PAIR_Z_MIN  # lowest target [m]: 6 cm above the table top (z = -0.09)
 SETTLE = 0.5  # [s] run after tau before judging the physics
 REACH_TOLERANCE = 0.01  # [m] imagined residual above which a pair is skipped
 
@@ -93,56 +99,6 @@ def load_or_train(directory: Path, n_babbles: int, retrain: bool) -> tuple[dict,
         gng.save(path)
         maps[arm] = gng
     return maps, info
-
-
-def sample_pairs(space: PeripersonalSpace, n: int, seed: int) -> np.ndarray:
-    """(n, 2, 3) targets [m]: left from the left map's shared neurons, right from the right
-    map's, both above ``Z_MIN``."""
-    rng = np.random.default_rng(seed)
-    pts = {}
-    for arm in HANDS:
-        p = space.shared.points(arm)
-        pts[arm] = p[p[:, 2] >= Z_MIN]
-    i = rng.integers(0, len(pts["left"]), n)
-    j = rng.integers(0, len(pts["right"]), n)
-    return np.stack([pts["left"][i], pts["right"][j]], axis=1)
-
-
-def execute_pair(loop: SimLoop, plans: dict, settle: float) -> dict:
-    """Run both imagined reaches in parallel through the controller; physics contacts."""
-    sim, ctl = loop.sim, loop.controller
-    sim.reset("rest")
-    for name, pos in (("box", (0.6, 0.4, -0.55)), ("cylinder", (0.6, -0.4, -0.55))):
-        sim.set_object_pose(name, pos)  # off the table, on the floor behind the robot
-    js = sim.joint_state()
-    ctl.step(js.time, js.position, js.velocity)  # the controller sees the reset posture ...
-    ctl.hold()  # ... and holds it (no set-point left from the previous pair)
-    t0 = loop.t
-    for p in plans.values():
-        ctl.set_trajectory(ctl.make_trajectory(p.joint_names, p.t, p.positions, p.velocities,
-                                               start=t0), t0)
-    duration = max(p.tau for p in plans.values()) + settle
-    first, bodies, other = None, set(), set()
-    for _ in range(int(round(duration / sim.config.timestep))):
-        loop.step()
-        if sim.data.ncon:
-            for c in sim.self_contacts():
-                if c.kind == "arm-arm":
-                    if first is None:
-                        first = loop.t - t0
-                    bodies.add((c.body1, c.body2))
-                else:
-                    other.add((c.body1, c.body2))
-    return {"collided": first is not None, "first_contact_s": first,
-            "bodies": sorted(bodies), "arm_torso": sorted(other)}
-
-
-def scores(pred: np.ndarray, truth: np.ndarray) -> tuple[float | None, float | None]:
-    """(recall, precision); None when undefined (no positives)."""
-    tp = int(np.sum(pred & truth))
-    recall = tp / int(truth.sum()) if truth.any() else None
-    precision = tp / int(pred.sum()) if pred.any() else None
-    return recall, precision
 
 
 def main() -> None:
@@ -181,7 +137,7 @@ def main() -> None:
     # ------------------------------------------------------------------ pairs
     check = ImaginedCollisionCheck()
     loop = SimLoop(sim_config=SimConfig(cameras_enabled=False), estimator=args.estimator)
-    targets = sample_pairs(space, 4 * n_pairs, args.seed)
+    targets = shared_target_pairs(space, 4 * n_pairs, args.seed)
     rows, skipped, plan_ms = [], 0, []
     exec_s = 0.0
     for tg in targets:
@@ -208,10 +164,10 @@ def main() -> None:
     truth = np.array([r["collided"] for r in rows])
     distal = np.array([r["distal_hit"] for r in rows])
     clear = np.array([r["min_clearance"] for r in rows])
-    recall, precision = scores(pred, truth)
-    d_recall, d_precision = scores(distal, truth)
+    recall, precision = recall_precision(pred, truth)
+    d_recall, d_precision = recall_precision(distal, truth)
     need = float(clear[truth].max()) + 1e-4 if truth.any() else None
-    p_need = scores(clear < need, truth)[1] if need is not None else None
+    p_need = recall_precision(clear < need, truth)[1] if need is not None else None
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / f"peripersonal_pairs_seed{args.seed}.json").write_text(json.dumps(rows, indent=1))
     result = {

@@ -42,7 +42,7 @@ def test_registry_holds_every_paper_in_report_order():
                  "pmp_eq4a_basic_vs_default", "force_table1_ft_prediction",
                  "force_fig6_7_rfrr_vs_krr", "force_fig11_motioncut_heldout",
                  "body_schema_model_rmse", "body_schema_gng_map", "body_schema_reward_field",
-                 "force_table2_jerk"):
+                 "body_schema_imagined_collisions", "force_table2_jerk"):
         assert must in names
     assert names[0].startswith("pmp_") and names[-1].startswith("body_schema_")
     for e in EXPERIMENTS:
