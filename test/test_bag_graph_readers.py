@@ -11,6 +11,8 @@ and the counts are compared with what the recorder says it wrote.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import subprocess
 import time
@@ -56,8 +58,16 @@ def _stop(rec: NodeProcess) -> dict[str, int]:
 
 
 def _icub(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([str(SCRIPTS / "env.sh"), "icub", *args], capture_output=True,
-                          text=True, timeout=600)
+    """`icub ARGS` (bag info / convert: files only, no ROS graph) run in this process, as
+    test_bag_readers.py runs them: the same code as the command without a new interpreter
+    per call (seconds each on a loaded machine); `icub bag` as a command, through
+    scripts/env.sh, is test_bag_core.py's and test_bag_record_replay.py's."""
+    from icub_pmp.cli.main import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(list(args))
+    return subprocess.CompletedProcess(["icub", *args], rc, out.getvalue(), err.getvalue())
 
 
 def _warned(bag: Path) -> set[str]:
@@ -171,8 +181,10 @@ def recorded(ros_domain_id, ros_probe_module, tmp_path_factory):
         feedback: list = []
         result = probe.send_goal(client, goal, 400.0, feedback=feedback).result
         assert feedback, result.message
-        # the goal's final status has reached the full recording (flushed every 0.5 s)
-        assert probe.wait_for(lambda: _final_status_in(out / "full"), 60), full.output()
+        # the goal's final status has reached the full recording (flushed every 0.5 s; read
+        # at that pace: each read scans the growing bag, CPU the lockstep graph needs)
+        assert probe.wait_for(lambda: _final_status_in(out / "full"), 60, period=0.5), \
+            full.output()
         written = {"default": _stop(default), "full": _stop(full)}
         probe.destroy(pub)
         probe.destroy(client)
