@@ -23,7 +23,7 @@ import pytest
 from icub_pmp.bags import BagReader, BagWriter, MessageDefinitions
 from icub_pmp.testing import NodeGraph, NodeProcess, repo_root
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 SCRIPTS = repo_root() / "scripts"
 GRAPH = ["sim_bridge", "wrench_estimator", "impedance_controller", "pmp_planner",

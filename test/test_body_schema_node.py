@@ -11,6 +11,8 @@ from icub_pmp.body_schema import LEARNER_FIELDS, load_dataset
 from icub_pmp.kinematics import IcubModel, RobotSpec
 from icub_pmp.testing import NodeGraph
 
+pytestmark = pytest.mark.slow
+
 GRAPH = ["sim_bridge", "impedance_controller", "gaze_controller", "body_schema"]
 #: samples of the babbling run: each costs about 2 s of wall time in the lockstep graph with
 #: cameras (one or more attempts); 12 are enough for every claim below (shapes, limits, the

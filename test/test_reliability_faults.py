@@ -21,7 +21,7 @@ import pytest
 from icub_pmp.testing import NodeGraph
 from icub_pmp.testing.fault_injection import FAULT_GRAPH, FAULT_PARAMS, FaultInjector, format_table
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from icub_pmp.testing.fuzz_tally import FuzzTally
 from icub_pmp.testing.interface_fuzzer import InterfaceFuzzer
 from icub_pmp.testing.torque_watch import TorqueWatch
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 #: case counts x this: half of graph_interfaces' counts (what bench/reliability.py --quick
 #: draws; the full counts are bench/reliability.py's), at least one case per interface. The
