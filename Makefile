@@ -11,7 +11,7 @@ TF2_MSGS = $$(test -e $(VENV)/share/ament_index/resource_index/packages/tf2_msgs
 PKG := setup.py setup.cfg package.xml $(wildcard config/*.yaml)
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: env test lint demo bench paper clean lock
+.PHONY: env test test-fast lint demo bench paper clean lock
 
 env: $(VENV)/.deps-stamp install/.build-stamp
 
@@ -38,6 +38,10 @@ lint: env
 
 test: env
 	scripts/env.sh scripts/run_tests.sh
+
+# the inner loop: the same lint and suite without the modules marked slow (CI runs make test)
+test-fast: env
+	scripts/env.sh scripts/run_tests.sh -m "not slow"
 
 demo: env
 	scripts/env.sh scripts/demo.sh

@@ -8,6 +8,11 @@ Marker ``integration``: tests that talk over DDS or start node subprocesses. Eve
 uses the session's domain (``ros_domain_id``, ``ros_probe``) gets it automatically; modules
 that start processes otherwise set ``pytestmark = pytest.mark.integration``. The fast inner
 loop is ``pytest -m "not integration"``.
+
+Marker ``slow``: the few modules that each take a minute or more of a 2-core machine (the DDS
+fuzzing, the node faults and soak, the babbling run, the bags of the running graph, the two
+hosts). ``make test`` (and CI) runs them; ``make test-fast`` (``-m "not slow"``) leaves them
+out for the inner loop. docs/decisions/0027-test-suite-time.md lists the figures.
 """
 
 from __future__ import annotations
@@ -27,6 +32,9 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers", "integration: talks over DDS or starts node subprocesses (slow; deselect "
                    "with -m 'not integration')")
+    config.addinivalue_line(
+        "markers", "slow: a module of a minute or more on 2 cores; run by make test, left out "
+                   "by make test-fast (-m 'not slow')")
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

@@ -11,6 +11,8 @@ and the counts are compared with what the recorder says it wrote.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import subprocess
 import time
@@ -21,7 +23,7 @@ import pytest
 from icub_pmp.bags import BagReader, BagWriter, MessageDefinitions
 from icub_pmp.testing import NodeGraph, NodeProcess, repo_root
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 SCRIPTS = repo_root() / "scripts"
 GRAPH = ["sim_bridge", "wrench_estimator", "impedance_controller", "pmp_planner",
@@ -36,9 +38,11 @@ PARAMS = {
 N_IMAGES = 5
 
 
-def _record(bag: Path, *args: str) -> NodeProcess:
+def _record(bag: Path, *args: str, wait: bool = True) -> NodeProcess:
+    """A recorder started as a user starts it; with ``wait``, once it says it records."""
     rec = NodeProcess(command=[str(SCRIPTS / "record.sh"), "-o", str(bag), "--json", *args])
-    assert rec.wait_for_output("recording to", 60), rec.output()
+    if wait:
+        assert rec.wait_for_output("recording to", 60), rec.output()
     return rec
 
 
@@ -56,8 +60,16 @@ def _stop(rec: NodeProcess) -> dict[str, int]:
 
 
 def _icub(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([str(SCRIPTS / "env.sh"), "icub", *args], capture_output=True,
-                          text=True, timeout=600)
+    """`icub ARGS` (bag info / convert: files only, no ROS graph) run in this process, as
+    test_bag_readers.py runs them: the same code as the command without a new interpreter
+    per call (seconds each on a loaded machine); `icub bag` as a command, through
+    scripts/env.sh, is test_bag_core.py's and test_bag_record_replay.py's."""
+    from icub_pmp.cli.main import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(list(args))
+    return subprocess.CompletedProcess(["icub", *args], rc, out.getvalue(), err.getvalue())
 
 
 def _warned(bag: Path) -> set[str]:
@@ -143,9 +155,12 @@ def recorded(ros_domain_id, ros_probe_module, tmp_path_factory):
     with NodeGraph(GRAPH, PARAMS) as graph:
         assert probe.wait_for_service("/pmp/reach", Reach, 180), graph.outputs()
         client = probe.action_client("/pmp/reach_action", ReachAction, timeout=180)
-        default = _record(out / "default", "--all")
-        full = _record(out / "full", "--all", "--all-services", "--all-actions")
+        # both recorders start together: the default bag does not record the 1 kHz topics
+        # through the second recorder's start-up (every message is decoded twice below)
+        default = _record(out / "default", "--all", wait=False)
+        full = _record(out / "full", "--all", "--all-services", "--all-actions", wait=False)
         for rec in (default, full):
+            assert rec.wait_for_output("recording to", 60), rec.output()
             assert rec.wait_for_output("recording /tf ", 120), rec.output()
         for topic in ("/pmp/reach/_service_event", "/pmp/reach_action/_action/feedback",
                       "/pmp/reach_action/_action/status"):
@@ -171,8 +186,10 @@ def recorded(ros_domain_id, ros_probe_module, tmp_path_factory):
         feedback: list = []
         result = probe.send_goal(client, goal, 400.0, feedback=feedback).result
         assert feedback, result.message
-        # the goal's final status has reached the full recording (flushed every 0.5 s)
-        assert probe.wait_for(lambda: _final_status_in(out / "full"), 60), full.output()
+        # the goal's final status has reached the full recording (flushed every 0.5 s; read
+        # at that pace: each read scans the growing bag, CPU the lockstep graph needs)
+        assert probe.wait_for(lambda: _final_status_in(out / "full"), 60, period=0.5), \
+            full.output()
         written = {"default": _stop(default), "full": _stop(full)}
         probe.destroy(pub)
         probe.destroy(client)

@@ -21,7 +21,7 @@ import pytest
 from icub_pmp.testing import NodeGraph
 from icub_pmp.testing.fault_injection import FAULT_GRAPH, FAULT_PARAMS, FaultInjector, format_table
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")
@@ -80,16 +80,17 @@ def test_estimator_sigkill_controller_stays_safe(injector):
 
 
 def test_short_soak_answers_every_goal(injector):
-    """After the faults, a short soak on the same graph (reach / squeeze / release cycles):
-    every goal and call answered and succeeded, the loop keeps stepping, memory sampled."""
+    """After the faults, a short soak on the same graph (three reach / squeeze / release
+    cycles: the fewest that give a memory slope): every goal and call answered and
+    succeeded, the loop keeps stepping, memory sampled. The timed soaks (2 and 30 min) are
+    bench/reliability.py's."""
     import math
 
     from icub_pmp.testing.soak import SoakRunner
 
     inj, _ = injector
-    report = SoakRunner(inj.probe, inj.graph, inj.client).run(0.75)
+    report = SoakRunner(inj.probe, inj.graph, inj.client).run(0.0, min_cycles=3)
     print("\n", report.summary())
-    assert report.cycles >= 3
     assert report.goals_answered == report.goals_sent, report.summary()
     assert report.goals_succeeded == report.goals_sent, report.summary()
     assert report.loop_rate_first > 0 and report.loop_rate_last > 0, report.summary()

@@ -18,10 +18,13 @@ from icub_pmp.testing.fuzz_tally import FuzzTally
 from icub_pmp.testing.interface_fuzzer import InterfaceFuzzer
 from icub_pmp.testing.torque_watch import TorqueWatch
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
-#: case counts x this (the whole file stays within a few minutes on two cores)
-SCALE = 1.0
+#: case counts x this (the full counts are bench/reliability.py's). The draws are
+#: derandomised: at 0.7 every service and action that draws a plausible case (one that gets
+#: past validation into planning, solving or executing) at full scale still draws one; at 0.5
+#: the look-at, the trajectory and the reach goals drew none (decision 0027)
+SCALE = 0.7
 
 
 @pytest.fixture(scope="module")

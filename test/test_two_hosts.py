@@ -13,7 +13,7 @@ from icub_pmp.config import repo_root
 from icub_pmp.graph import NodeProcess, VethLink, VethLinkError, reserve_domain_id
 from icub_pmp.graph import ros_environment as _ros_environment
 
-pytestmark = pytest.mark.integration
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 ENV_SH = str(repo_root() / "scripts" / "env.sh")
 

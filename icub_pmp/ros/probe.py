@@ -119,13 +119,15 @@ class RosProbe:
         return self._on_spin_thread(fn)
 
     # ---------------------------------------------------------------- graph waits
-    def wait_for(self, predicate: Callable[[], bool], timeout: float) -> bool:
-        """Poll ``predicate`` every 20 ms until true or ``timeout`` s pass."""
+    def wait_for(self, predicate: Callable[[], bool], timeout: float,
+                 period: float = 0.02) -> bool:
+        """Poll ``predicate`` every ``period`` s (20 ms) until true or ``timeout`` s pass (a
+        costly predicate, such as reading a bag being written, polls less often)."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if predicate():
                 return True
-            time.sleep(0.02)
+            time.sleep(period)
         return predicate()
 
     def wait_for_topic(self, topic: str, timeout: float = 20.0, publishers: int = 1) -> bool:

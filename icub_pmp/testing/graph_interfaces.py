@@ -117,7 +117,7 @@ def topics(scale: float = 1.0) -> list[FuzzTarget]:
     """Every topic the nodes subscribe to (the simulator's /effort_command is left to
     :func:`effort_topic`: fuzzing it stops the torque checks)."""
     from geometry_msgs.msg import PointStamped, WrenchStamped
-    from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
+    from sensor_msgs.msg import CameraInfo, Image, JointState
     from trajectory_msgs.msg import JointTrajectory
 
     from icub_interfaces.msg import Obstacles
@@ -135,8 +135,9 @@ def topics(scale: float = 1.0) -> list[FuzzTarget]:
                    cases=n(30)),
         FuzzTarget("/impedance_controller/velocity_command", JointState,
                    ("impedance_controller",), cases=n(20)),
-        FuzzTarget("/ft/r_arm_ft_sensor", WrenchStamped, ("wrench_estimator",), cases=n(20)),
-        FuzzTarget("/imu", Imu, ("wrench_estimator",), cases=n(20)),
+        FuzzTarget("/ft/r_arm_ft", WrenchStamped, ("wrench_estimator",), cases=n(20)),
+        # /imu is left out: the estimator subscribes to it only with gravity_source: imu,
+        # not the shipped config (a publisher there reaches no node)
         FuzzTarget("/cam/left/image_raw", Image, ("motion_segmenter", "body_schema"),
                    cases=n(20)),
         FuzzTarget("/cam/right/camera_info", CameraInfo, ("motion_segmenter", "body_schema"),

@@ -180,12 +180,17 @@ class InterfaceFuzzer:
                 t.note(f"aborted without a message: {str(goal)[:300]}")
 
     # ------------------------------------------------------------------ topics
-    def _publisher(self, topic: str, msg_type: Any) -> Any:
+    def _publisher(self, t: InterfaceTally, topic: str, msg_type: Any) -> Any:
+        """A reliable publisher on ``topic``, once a subscriber matched; when none matched in
+        30 s (a wrong topic name, a node that does not subscribe) it counts as a hang: the
+        cases would reach no node."""
         from rclpy.qos import QoSProfile, ReliabilityPolicy
 
         pub = self.probe.node.create_publisher(
             msg_type, topic, QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE))
-        self.probe.wait_for(lambda: pub.get_subscription_count() >= 1, 30.0)
+        if not self.probe.wait_for(lambda: pub.get_subscription_count() >= 1, 30.0):
+            t.hangs += 1
+            t.note(f"no subscriber of {topic} matched in 30 s: the cases reach no node")
         return pub
 
     def fuzz_topic(self, topic: str, msg_type: Any, nodes: Sequence[str], n: int,
@@ -193,7 +198,7 @@ class InterfaceFuzzer:
         """``n`` drawn messages on ``topic`` (one every ``period`` s); every node of ``nodes``
         (its subscribers) must still run afterwards."""
         t = self.tally.get(topic, "topic", ",".join(nodes))
-        pub = self._publisher(topic, msg_type)
+        pub = self._publisher(t, topic, msg_type)
         last: list[Any] = [None]
         try:
             def case(msg: Any) -> bool:
@@ -219,7 +224,7 @@ class InterfaceFuzzer:
         from rclpy.serialization import serialize_message
 
         t = self.tally.get(f"{topic} (order/rate/cdr)", "topic", ",".join(nodes))
-        pub = self._publisher(topic, type(template))
+        pub = self._publisher(t, topic, type(template))
         try:
             h = getattr(template, "header", None)
             t0 = h.stamp.sec + h.stamp.nanosec * 1e-9 if h is not None else time.time()

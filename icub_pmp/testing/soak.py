@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from icub_pmp.errors import InvalidInput
 from icub_pmp.graph import NodeGraph
 from icub_pmp.ros.probe import RosProbe
 
@@ -205,8 +206,12 @@ class SoakRunner:
         self.probe.wait_for(lambda: still() or self.sim_time >= end, 120.0)
         return still()
 
-    def run(self, minutes: float) -> SoakReport:
-        """Cycles for ``minutes`` of wall time (at least two)."""
+    def run(self, minutes: float, min_cycles: int = 2) -> SoakReport:
+        """Cycles for ``minutes`` of wall time, and at least ``min_cycles`` (``run(0, 3)``:
+        exactly three cycles, the fewest that give an RSS slope over two samples after the
+        first cycle)."""
+        if min_cycles < 1:
+            raise InvalidInput(f"min_cycles: expected at least 1 cycle, got {min_cycles}")
         names = list(self.graph.procs)
         rss: dict[str, list[float]] = {n: [] for n in names}
         stamps: list[float] = []
@@ -216,7 +221,7 @@ class SoakRunner:
         t0 = time.monotonic()
         prev_warn = sum(_warnings(p.output()) for p in self.graph.procs.values())
         k = 0
-        while k < 2 or time.monotonic() - t0 < minutes * 60.0:
+        while k < min_cycles or time.monotonic() - t0 < minutes * 60.0:
             w0, s0 = time.monotonic(), self.sim_time
             for i, v in enumerate(self.cycle(k)):
                 totals[i] += v
