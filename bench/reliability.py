@@ -122,6 +122,8 @@ def main() -> int:
                     help="half the fuzz cases, each node faulted once, a 2-minute soak")
     ap.add_argument("--soak-minutes", type=float, default=None,
                     help="soak duration [min] (default 2 with --quick, else 30)")
+    ap.add_argument("--fuzz-only", action="store_true",
+                    help="phase 1 only (the fuzz tally), no faults and no soak")
     args = ap.parse_args()
     scale = 0.5 if args.quick else 1.0
     soak_minutes = args.soak_minutes or (2.0 if args.quick else 30.0)
@@ -132,7 +134,8 @@ def main() -> int:
         probe = RosProbe(domain, "reliability_bench")
         try:
             result = {"bench": "reliability", "quick": args.quick, **fuzz(probe, env, scale)}
-            result.update(faults(probe, env, args.quick, soak_minutes))
+            if not args.fuzz_only:
+                result.update(faults(probe, env, args.quick, soak_minutes))
         finally:
             probe.close()
     result["load_start"] = round(load0, 2)
