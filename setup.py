@@ -24,7 +24,8 @@ NODES = {
 setup(
     name=PACKAGE,
     version="0.1.0",
-    packages=find_packages(include=["icub_pmp", "icub_pmp.*", "icub_sim_bridge", "icub_sim_bridge.*"]),
+    packages=find_packages(include=["icub_pmp", "icub_pmp.*", "icub_sim_bridge",
+                                    "icub_sim_bridge.*"]),
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
