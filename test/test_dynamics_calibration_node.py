@@ -27,7 +27,7 @@ def graph(ros_domain_id):
     params = {
         "sim_bridge": {"cameras_enabled": False, "imu_decimation": 10,
                        "realism.preset": "icub", "realism.ft_force_offset": 5.0},
-        # the service itself: no start-up calibration (the shipped file has it)
+        # the service itself: no start-up calibration
         "wrench_estimator": {"publish_every": 10, "calibrate_at_startup": False},
     }
     with NodeGraph(["sim_bridge", "wrench_estimator"], params,
@@ -100,14 +100,14 @@ def test_calibration_is_refused_while_the_robot_moves(graph, probe):
     assert "moved" in resp.message and "offsets unchanged" in resp.message, resp.message
 
 
-def test_the_shipped_estimator_calibrates_at_startup(ros_domain_id, graph):
-    """With config/wrench_estimator.yaml as shipped (calibrate_at_startup) on the icub preset
-    with 5 N offsets, the estimator calibrates by itself on the still robot after start: with
-    no call, the external force over a still second is near zero, not the offset."""
+def test_calibrate_at_startup_removes_the_offset_by_itself(ros_domain_id, graph):
+    """With ``calibrate_at_startup`` on the icub preset with 5 N offsets, the estimator
+    calibrates by itself on the still robot after start: with no call, the external force
+    over a still second is near zero, not the offset."""
     params = {
         "sim_bridge": {"cameras_enabled": False, "imu_decimation": 10,
                        "realism.preset": "icub", "realism.ft_force_offset": 5.0},
-        "wrench_estimator": {"publish_every": 10},
+        "wrench_estimator": {"publish_every": 10, "calibrate_at_startup": True},
     }
     graph.stop()  # one simulator in the domain at a time
     with NodeGraph(["sim_bridge", "wrench_estimator"], params,
