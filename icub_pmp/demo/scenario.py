@@ -584,15 +584,19 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
 def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]:
     """The demo's node parameters over their config files: the simulator in lockstep with the
     controller, every other node on simulated time; ``realism`` overrides the simulator's
-    ``realism.preset`` (None = config/sim_bridge.yaml's)."""
+    ``realism.preset`` (None = config/sim_bridge.yaml's); with ``icub`` the controller
+    compensates the joint friction (``friction_compensation``)."""
     sim: dict[str, object] = {"mode": "lockstep", "use_sim_time": False}
+    # stiff position tracking for the reaches (the compliant mode is the controller's
+    # default; config/impedance_controller.yaml)
+    controller: dict[str, object] = {"lockstep": True, "use_sim_time": True, "mode": "position"}
     if realism is not None:
         sim["realism.preset"] = realism
+    if realism == "icub":  # the robot's joint friction, added back by the torque loop
+        controller["friction_compensation"] = True
     return {
         "sim_bridge": sim,
-        # stiff position tracking for the reaches (the compliant mode is the controller's
-        # default; config/impedance_controller.yaml)
-        "impedance_controller": {"lockstep": True, "use_sim_time": True, "mode": "position"},
+        "impedance_controller": controller,
         "wrench_estimator": {"use_sim_time": True},
         "pmp_planner": {"use_sim_time": True},
         "cartesian_solver": {"use_sim_time": True},
