@@ -67,7 +67,12 @@ class CameraPerturbation(NamedTuple):
 
 
 def add_image_noise(image: np.ndarray, std: float, rng: np.random.Generator) -> np.ndarray:
-    """``image`` (h, w, 3) uint8 plus white noise of ``std`` grey levels (clipped, uint8)."""
-    noisy = image.astype(np.int16) + np.round(rng.normal(0.0, std, image.shape)).astype(
-        np.int16)
-    return np.clip(noisy, 0, 255).astype(np.uint8)
+    """``image`` (h, w, 3) uint8 plus white noise of ``std`` grey levels (rounded, clipped,
+    uint8). In float32 (a third of the float64 cost: two 320x240 images at 30 Hz run on the
+    simulator's camera thread)."""
+    noisy = rng.standard_normal(image.shape, dtype=np.float32)
+    noisy *= np.float32(std)
+    noisy += image
+    np.rint(noisy, out=noisy)
+    np.clip(noisy, 0, 255, out=noisy)
+    return noisy.astype(np.uint8)

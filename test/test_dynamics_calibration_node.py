@@ -27,7 +27,8 @@ def graph(ros_domain_id):
     params = {
         "sim_bridge": {"cameras_enabled": False, "imu_decimation": 10,
                        "realism.preset": "icub", "realism.ft_force_offset": 5.0},
-        "wrench_estimator": {"publish_every": 10},
+        # the service itself: no start-up calibration
+        "wrench_estimator": {"publish_every": 10, "calibrate_at_startup": False},
     }
     with NodeGraph(["sim_bridge", "wrench_estimator"], params,
                    env=ros_environment(ros_domain_id)) as g:
@@ -97,3 +98,26 @@ def test_calibration_is_refused_while_the_robot_moves(graph, probe):
         probe.destroy(pub)
     assert not resp.success, resp.message
     assert "moved" in resp.message and "offsets unchanged" in resp.message, resp.message
+
+
+def test_calibrate_at_startup_removes_the_offset_by_itself(ros_domain_id, graph):
+    """With ``calibrate_at_startup`` on the icub preset with 5 N offsets, the estimator
+    calibrates by itself on the still robot after start: with no call, the external force
+    over a still second is near zero, not the offset."""
+    params = {
+        "sim_bridge": {"cameras_enabled": False, "imu_decimation": 10,
+                       "realism.preset": "icub", "realism.ft_force_offset": 5.0},
+        "wrench_estimator": {"publish_every": 10, "calibrate_at_startup": True},
+    }
+    graph.stop()  # one simulator in the domain at a time
+    with NodeGraph(["sim_bridge", "wrench_estimator"], params,
+                   env=ros_environment(ros_domain_id)) as g:
+        p = RosProbe(ros_domain_id, "startup_calibration_probe")
+        try:
+            assert p.collect(_EXT, WrenchStamped, 1, 90.0), g.outputs()
+            p.wait_for(lambda: False, 2.0)  # the first still window (500 samples) and more
+            after = _mean_force(p, g)
+        finally:
+            p.close()
+        assert np.linalg.norm(after) < _AFTER_BOUND, (after, g.outputs())
+        assert "start-up FT offsets calibrated" in g.outputs(), g.outputs()

@@ -258,6 +258,25 @@ class DemoRunner:
             if not self.probe.wait_for_service(srv, types[srv], timeout):
                 raise TimeoutError(f"service {srv} not available after {timeout} s")
 
+    def calibrate_estimator(self, timeout: float = 10.0) -> str:
+        """Calibrate the wrench estimator's FT offsets (/wrench_estimator/calibrate) on the
+        still robot before the first goal, as wholeBodyDynamics is calibrated: the call is
+        repeated every 0.6 s of simulated time (a fresh ``calibration_samples`` window) until
+        it succeeds or ``timeout`` s of simulated time have passed (RuntimeError with the
+        estimator's last reason). Returns the estimator's message (the offsets)."""
+        from std_srvs.srv import Trigger
+
+        end = self.sim_time() + timeout
+        while True:
+            self.wait_sim(0.6)
+            res = self.probe.call("/wrench_estimator/calibrate", Trigger, Trigger.Request(),
+                                  timeout=60.0)
+            if res.success:
+                return res.message
+            if self.sim_time() >= end:
+                raise RuntimeError(f"the wrench estimator did not calibrate within {timeout} s "
+                                   f"of simulated time: {res.message}")
+
     # ----------------------------------------------------------------- phases
     def _action(self, name: str, action_type):  # noqa: ANN202 - ROS type
         """A cached action client of the probe (waits for its server)."""
@@ -395,15 +414,16 @@ class DemoRunner:
             self.probe.wait_for(lambda t_next=t_next: self.sim_time() >= t_next, 60.0)
 
 
-def run_demo(out_dir: Path, quick: bool = False) -> int:
-    """Run the whole demo; returns the process exit code (non-zero if a phase failed)."""
+def run_demo(out_dir: Path, quick: bool = False, realism: str | None = None) -> int:
+    """Run the whole demo; returns the process exit code (non-zero if a phase failed).
+    ``realism``: the simulator's realism preset (None = the shipped config's)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     bag_dir = out_dir / "bag"
     results: list[PhaseResult] = []
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
         print(f"demo: ROS_DOMAIN_ID={domain}, output in {out_dir}", flush=True)
-        with NodeGraph(GRAPH, graph_parameters(), env=env) as graph:
+        with NodeGraph(GRAPH, graph_parameters(realism), env=env) as graph:
             recorder = NodeProcess(
                 command=[str(repo_root() / "scripts/record.sh"), "-o", str(bag_dir), "--all"],
                 env=env)
@@ -413,6 +433,8 @@ def run_demo(out_dir: Path, quick: bool = False) -> int:
                 print("demo: waiting for the graph ...", flush=True)
                 runner.wait_ready()
                 runner.wait_sim(0.5)
+                # the FT offsets, on the still robot before any goal (realism icub: a few N)
+                print(f"demo: {runner.calibrate_estimator()}", flush=True)
                 results = run_phases(runner, quick)
             except Exception as exc:  # report what happened, never a bare traceback
                 results.append(PhaseResult("graph", False, f"{type(exc).__name__}: {exc}"))
@@ -515,7 +537,10 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     runner.estimates.clear()
     t0 = runner.sim_time()
     runner.move_object("cylinder", start, velocity, duration)
-    est = wait_still_target(runner, t0 + duration)
+    # the motion ends when its last pose is set: on a loaded machine each /sim/set_object_pose
+    # takes more than its 1/60 s of simulated time, so later than t0 + duration (a still
+    # target between two late steps is not the stopped cylinder)
+    est = wait_still_target(runner, max(t0 + duration, runner.sim_time()))
     if est is None:
         runner.set_tracking(False)
         return PhaseResult(name, False, "no still stereo target of the cylinder after it "
@@ -556,19 +581,29 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     return vr
 
 
-def graph_parameters() -> dict[str, dict[str, object]]:
+def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]:
     """The demo's node parameters over their config files: the simulator in lockstep with the
-    controller, every other node on simulated time."""
+    controller, every other node on simulated time; ``realism`` overrides the simulator's
+    ``realism.preset`` (None = config/sim_bridge.yaml's); with ``icub`` the controller
+    compensates the joint friction (``friction_compensation``)."""
+    sim: dict[str, object] = {"mode": "lockstep", "use_sim_time": False}
+    # stiff position tracking for the reaches (the compliant mode is the controller's
+    # default; config/impedance_controller.yaml)
+    controller: dict[str, object] = {"lockstep": True, "use_sim_time": True, "mode": "position"}
+    if realism is not None:
+        sim["realism.preset"] = realism
+    if realism == "icub":  # the robot's joint friction, added back by the torque loop
+        controller["friction_compensation"] = True
     return {
-        "sim_bridge": {"mode": "lockstep", "use_sim_time": False},
-        # stiff position tracking for the reaches (the compliant mode is the controller's
-        # default; config/impedance_controller.yaml)
-        "impedance_controller": {"lockstep": True, "use_sim_time": True, "mode": "position"},
+        "sim_bridge": sim,
+        "impedance_controller": controller,
         "wrench_estimator": {"use_sim_time": True},
         "pmp_planner": {"use_sim_time": True},
         "cartesian_solver": {"use_sim_time": True},
         "motion_segmenter": {"use_sim_time": True},
-        "gaze_controller": {"use_sim_time": True},
+        # a look_at's wait is bounded in wall time: under load the lockstep graph may run at a
+        # few per cent of real time
+        "gaze_controller": {"use_sim_time": True, "wait_timeout": 180.0},
         "robot_state_publisher": {"use_sim_time": True},
     }
 
@@ -697,9 +732,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="output folder (default bags/demo-<ts>)")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--realism", choices=("ideal", "icub"), default=None,
+                    help="the simulator's realism preset (default: config/sim_bridge.yaml's)")
     args = ap.parse_args(argv)
     out = args.out or repo_root() / "bags" / time.strftime("demo-%Y%m%d-%H%M%S")
-    rc = run_demo(out, args.quick)
+    rc = run_demo(out, args.quick, args.realism)
     (out / "summary.json").write_text(json.dumps({"exit_code": rc}, indent=2))
     return rc
 

@@ -125,6 +125,7 @@ class WrenchEstimator:
             cfg.calibration_samples, self.nq, len(HANDS), cfg.calibration_motion_tolerance,
             tuple(self.joint_names))
         self.calibrated = False  # offsets from a calibration (not the start-up average)
+        self._startup_window_skipped = False  # calibrate_at_startup (calibrate_offsets)
         self.calibration_error: str = ""  # why the last start-up attempt was refused
         self._residual = np.zeros((len(HANDS), 6))
 
@@ -167,6 +168,9 @@ class WrenchEstimator:
         self._offset_n = 0
         self.calibrated = False
         self.calibration.clear()
+        # calibrate_at_startup skips the first full window: the FT low-passes start on the
+        # first sample, which in the node graph can be one of before the physics loop ran
+        self._startup_window_skipped = False
 
     def calibrate_from_recent(self) -> FtOffsets:
         """Set the FT offsets to the mean residual (measured - predicted) of the last
@@ -300,11 +304,15 @@ class WrenchEstimator:
             r[k] = x[h] - p[h]
         self.calibration.add(q, r)
         if cfg.calibrate_at_startup and not self.calibrated and self.calibration.full:
-            try:
-                self.calibrate_from_recent()
-            except CalibrationError as exc:  # moved: try again on the next full window
-                self.calibration_error = str(exc)
+            if not self._startup_window_skipped:  # the filters' start (calibrate_offsets)
+                self._startup_window_skipped = True
                 self.calibration.clear()
+            else:
+                try:
+                    self.calibrate_from_recent()
+                except CalibrationError as exc:  # moved: try again on the next full window
+                    self.calibration_error = str(exc)
+                    self.calibration.clear()
         if self._offset_n:
             x = {h: x[h] - self._offset[h] for h in HANDS}
 

@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 
 from icub_pmp.vision.head_cameras import CameraPoses, HeadCameras
+
+if TYPE_CHECKING:
+    from icub_sim_bridge.realism_config import RealismConfig
 
 __all__ = ["TableScene", "SceneFrame"]
 
@@ -45,7 +48,9 @@ class SceneFrame:
 class TableScene:
     """Pose and render the simulator's scene (module doc)."""
 
-    def __init__(self) -> None:
+    def __init__(self, realism: "RealismConfig | None" = None) -> None:
+        """``realism``: the simulator's imperfections (camera miscalibration and pixel noise
+        as ``sim_bridge`` renders them; None = the ideal cameras)."""
         os.environ.setdefault("MUJOCO_GL", "egl")
         import mujoco
 
@@ -56,7 +61,7 @@ class TableScene:
 
         self._mj = mujoco
         self._eye_cameras = EYE_CAMERAS
-        self.sim = Simulator(SimConfig())
+        self.sim = Simulator(SimConfig(), realism=realism)
         self.camera = self.sim.built.camera
         self._renderer = CameraRenderer(self.sim.model, self.camera, threaded=False)
         self._seg = mujoco.Renderer(self.sim.model, self.camera.height, self.camera.width)
@@ -84,6 +89,9 @@ class TableScene:
         """Render both eyes and the objects' true pixels."""
         mj = self._mj
         images = self._renderer.render(self.sim.data)
+        imp = self.sim.imperfections
+        if imp is not None:  # realism: pixel noise, as sim_bridge publishes the images
+            images = {side: imp.noisy_image(img) for side, img in images.items()}
         masks: dict[str, dict[str, np.ndarray]] = {o: {} for o in self._geoms}
         for side in ("left", "right"):
             self._seg.update_scene(self.sim.data, camera=self._eye_cameras[side],
