@@ -63,7 +63,7 @@ class LmTrainerConfig(ConfigBase):
         curvature_samples: samples J^T J is built from per ``lm-normal`` iteration (0: all).
         curvature_dtype: ``float64`` | ``float32`` precision of ``lm-normal``'s J^T J.
         initial_damping: ``lm-normal``'s starting mu (relative to diag(J^T J)).
-        budget_clock: ``wall`` | ``cpu``: what ``lm-normal``'s time budget counts (``cpu``:
+        budget_clock: ``wall`` | ``cpu``: what the time budget counts (``cpu``:
             this process's CPU time, which a shared machine's load does not inflate; with
             one BLAS thread it equals the wall time of an idle machine).
     """
@@ -226,8 +226,11 @@ class LmTrainer:
             kwargs.update(method="lm", jac=dense_jac)
         else:
             if c.time_budget > 0:
+                clock = time.process_time if c.budget_clock == "cpu" else time.perf_counter
+                b0 = clock()
+
                 def stop(intermediate_result) -> None:  # noqa: ARG001 - scipy's signature
-                    if time.perf_counter() - t0 > c.time_budget:
+                    if clock() - b0 > c.time_budget:
                         raise StopIteration
                 kwargs["callback"] = stop
             if c.method == "trf":
