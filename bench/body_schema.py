@@ -17,7 +17,8 @@ null (the quick run does not start the graph).
 - Body network (eqs 1-2 of the body-schema paper): trained by Levenberg-Marquardt on the normal
   equations (``lm-normal``: J^T J accumulated over batches of 3,000 random babbles per
   iteration, Cholesky, Marquardt's adaptive damping, 10 % validation split; decision 0042)
-  within a budget of CPU time (30 s quick, 60 s full; ``body_train_s`` is the wall time, which the machine's load inflates);
+  within a budget of CPU time (30 s quick, 60 s full; ``body_train_s`` is the wall time,
+  which the machine's load inflates);
   ``body_rmse_mm`` on the held-out set; the previous trainer (scipy ``least_squares`` trf +
   LSMR, decision 0040) on the same data with the same budget gives ``body_rmse_mm_trf_lsmr``;
   ``--curve`` adds the error vs babbles (1k-30k) and vs hidden sizes (``CURVE``), each within
