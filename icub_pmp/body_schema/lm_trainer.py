@@ -48,8 +48,8 @@ class LmTrainerConfig(ConfigBase):
         method: ``lm`` | ``trf`` | ``trf-lsmr`` | ``lm-normal`` (module doc).
         max_evaluations: residual evaluations at most (scipy's ``max_nfev``; for ``lm-normal``
             the number of J^T J builds, i.e. iterations).
-        time_budget: wall time [s] after which ``trf``/``trf-lsmr``/``lm-normal`` stop
-            (0: none).
+        time_budget: time [s] on ``budget_clock`` after which ``trf``/``trf-lsmr``/
+            ``lm-normal`` stop (0: none).
         ftol, xtol, gtol: scipy's termination tolerances.
         seed: seed of the initial weights.
         lsmr_iterations: LSMR iterations per trust-region step of ``trf-lsmr`` (an inexact
