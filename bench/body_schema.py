@@ -17,12 +17,12 @@ null (the quick run does not start the graph).
 - Body network (eqs 1-2 of the body-schema paper): trained by Levenberg-Marquardt on the normal
   equations (``lm-normal``: J^T J accumulated over batches of 3,000 random babbles per
   iteration, Cholesky, Marquardt's adaptive damping, 10 % validation split; decision 0042)
-  within a budget of CPU time (30 s quick, 60 s full; ``body_train_s`` is the wall time,
-  which the machine's load inflates); ``body_rmse_mm`` on the held-out set; the previous trainer (scipy ``least_squares`` trf +
-  LSMR, decision 0040) on the same data with the same budget gives ``body_rmse_mm_trf_lsmr``;
-  ``--curve`` adds the error vs babbles (1k-30k) and vs hidden sizes (``CURVE``), each within
-  the same budget; ``jacobian_err_rel`` median of
-  ||J_learned - J_pinocchio||_F / ||J_pinocchio||_F at held-out postures.
+  within a budget of CPU time (30 s quick, 60 s full; ``body_train_s`` is the wall time, which
+  the machine's load inflates); ``body_rmse_mm`` on the held-out set; the previous trainer
+  (scipy ``least_squares`` trf + LSMR, decision 0040) on the same data with the same budget
+  gives ``body_rmse_mm_trf_lsmr``; ``--curve`` adds the error vs babbles (1k-30k) and vs hidden
+  sizes (``CURVE``), each within the same budget; ``jacobian_err_rel`` median of ||J_learned -
+  J_pinocchio||_F / ||J_pinocchio||_F at held-out postures.
 - PMP: the same reachable targets (FK of held-out postures) planned from rest with the learned
   provider and with the analytic one (right arm, no torso); the error is the URDF hand at the
   planned final posture vs the target; success = within 5 mm.
@@ -32,9 +32,10 @@ null (the quick run does not start the graph).
   the real cameras are nominal. Perturbed: principal points shifted (+3, -2) px and (-2, +3) px,
   left camera rotated 1 deg about its y axis. Errors in the head-centred frame (``head``).
 - Adaptation (tool): the marker moves 12 cm along the hand frame's x axis; the model keeps
-  training (from its weights, within the training budget; a third of it ``--quick``) on
-  growing numbers of new babbles (up to 1,600, 6,400 full); ``adapt_samples`` is the fewest that bring the held-out error back within the error goal
-  (``adapt_goal_mm``: 2 mm, or 1.25x the model's own error when that is above 1.6 mm).
+  training (from its weights, within the training budget; a third of it ``--quick``) on growing
+  numbers of new babbles (up to 1,600, 6,400 full); ``adapt_samples`` is the fewest that bring
+  the held-out error back within the error goal (``adapt_goal_mm``: 2 mm, or 1.25x the model's
+  own error when that is above 1.6 mm).
 Ends with one JSON line. Paper figures are printed beside ours.
 """
 
