@@ -9,11 +9,15 @@ solvers, all scipy's:
 - ``trf``: scipy's trust-region reflective, the Levenberg-Marquardt step solved exactly
   (``tr_solver="exact"``) on the dense Jacobian;
 - ``trf-lsmr``: trust-region reflective with the step solved by LSMR on the Jacobian as a
-  ``LinearOperator`` (forward- and back-propagation, never formed): memory O(n + P), the
-  choice for 10k samples (decision record 0040).
+  ``LinearOperator`` (forward- and back-propagation, never formed): memory O(n + P)
+  (decision record 0040);
+- ``lm-normal``: Levenberg-Marquardt on the normal equations, J^T J (P x P) accumulated over
+  sample batches and solved by Cholesky with Marquardt's adaptive damping, early stopping on
+  a validation split (:class:`NormalEquationsLm`, decision record 0042).
 
-A time budget stops ``trf`` / ``trf-lsmr`` through scipy's callback (StopIteration); ``lm``
-is bounded by its evaluation budget only.
+A time budget stops ``trf`` / ``trf-lsmr`` through scipy's callback (StopIteration) and
+``lm-normal`` before an iteration that would overrun it; ``lm`` is bounded by its evaluation
+budget only.
 """
 
 from __future__ import annotations
@@ -26,13 +30,14 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse.linalg import LinearOperator
 
+from icub_pmp.body_schema.normal_equations_lm import NormalEquationsLm
 from icub_pmp.body_schema.tanh_mlp import TanhMlp
 from icub_pmp.config import ConfigBase
 from icub_pmp.errors import ConfigError, InvalidInput
 
 __all__ = ["LmTrainerConfig", "TrainingReport", "LmTrainer", "check_dataset"]
 
-METHODS = ("lm", "trf", "trf-lsmr")
+METHODS = ("lm", "trf", "trf-lsmr", "lm-normal")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,14 +45,27 @@ class LmTrainerConfig(ConfigBase):
     """Settings of :class:`LmTrainer`.
 
     Attributes:
-        method: ``lm`` | ``trf`` | ``trf-lsmr`` (module doc).
-        max_evaluations: residual evaluations at most (scipy's ``max_nfev``).
-        time_budget: wall time [s] after which ``trf``/``trf-lsmr`` stop (0: none).
+        method: ``lm`` | ``trf`` | ``trf-lsmr`` | ``lm-normal`` (module doc).
+        max_evaluations: residual evaluations at most (scipy's ``max_nfev``; for ``lm-normal``
+            the number of J^T J builds, i.e. iterations).
+        time_budget: time [s] on ``budget_clock`` after which ``trf``/``trf-lsmr``/
+            ``lm-normal`` stop (0: none).
         ftol, xtol, gtol: scipy's termination tolerances.
         seed: seed of the initial weights.
         lsmr_iterations: LSMR iterations per trust-region step of ``trf-lsmr`` (an inexact
             Levenberg-Marquardt step; scipy's default, min(m, n), costs minutes at 10k
             samples).
+        batch: samples per Jacobian batch of ``lm-normal``.
+        validation_fraction: share of the samples ``lm-normal`` holds out for early stopping
+            (0: none; the returned weights are the best on it).
+        patience: accepted ``lm-normal`` steps without a better validation error before it
+            stops.
+        curvature_samples: samples J^T J is built from per ``lm-normal`` iteration (0: all).
+        curvature_dtype: ``float64`` | ``float32`` precision of ``lm-normal``'s J^T J.
+        initial_damping: ``lm-normal``'s starting mu (relative to diag(J^T J)).
+        budget_clock: ``wall`` | ``cpu``: what the time budget counts (``cpu``:
+            this process's CPU time, which a shared machine's load does not inflate; with
+            one BLAS thread it equals the wall time of an idle machine).
     """
 
     method: str = "trf-lsmr"
@@ -58,6 +76,13 @@ class LmTrainerConfig(ConfigBase):
     gtol: float = 1e-10
     seed: int = 0
     lsmr_iterations: int = 40
+    batch: int = 1000
+    validation_fraction: float = 0.1
+    patience: int = 20
+    curvature_samples: int = 0
+    curvature_dtype: str = "float64"
+    initial_damping: float = 1e-3
+    budget_clock: str = "wall"
 
     def validate(self) -> None:
         """Ranges (raise :class:`ConfigError` naming the field)."""
@@ -69,6 +94,23 @@ class LmTrainerConfig(ConfigBase):
             raise ConfigError(f"time_budget: expected >= 0 s, got {self.time_budget}")
         if self.lsmr_iterations < 1:
             raise ConfigError(f"lsmr_iterations: expected >= 1, got {self.lsmr_iterations}")
+        if self.batch < 1:
+            raise ConfigError(f"batch: expected >= 1, got {self.batch}")
+        if not 0.0 <= self.validation_fraction < 0.5:
+            raise ConfigError(f"validation_fraction: expected in [0, 0.5), got "
+                              f"{self.validation_fraction}")
+        if self.patience < 1:
+            raise ConfigError(f"patience: expected >= 1, got {self.patience}")
+        if self.curvature_samples < 0:
+            raise ConfigError(f"curvature_samples: expected >= 0, got {self.curvature_samples}")
+        if self.curvature_dtype not in ("float64", "float32"):
+            raise ConfigError(f"curvature_dtype: expected 'float64' or 'float32', got "
+                              f"{self.curvature_dtype!r}")
+        if self.budget_clock not in ("wall", "cpu"):
+            raise ConfigError(f"budget_clock: expected 'wall' or 'cpu', got "
+                              f"{self.budget_clock!r}")
+        if not self.initial_damping > 0:
+            raise ConfigError(f"initial_damping: expected > 0, got {self.initial_damping}")
 
 
 
@@ -78,8 +120,13 @@ class TrainingReport(NamedTuple):
     rmse: float  # root mean squared Euclidean output error on the training data
     evaluations: int  # residual evaluations
     seconds: float  # wall time [s]
-    status: int  # scipy's status (-2: stopped by the time budget)
-    message: str
+    status: int  # scipy's status (-2: stopped by the time budget); lm-normal: 0
+    message: str  # scipy's message; lm-normal: why it stopped
+    validation_rmse: float = float("nan")  # on lm-normal's validation split
+    iterations: int = 0  # lm-normal's J^T J builds
+    rejected: int = 0  # lm-normal's rejected steps
+    damping: tuple[float, ...] = ()  # lm-normal's mu after each iteration
+    cpu_seconds: float = float("nan")  # this process's CPU time [s]
 
 
 def check_dataset(x: np.ndarray, y: np.ndarray, n_in: int, n_out: int
@@ -140,6 +187,8 @@ class LmTrainer:
     def _solve(self, net: TanhMlp, xn: np.ndarray, yn: np.ndarray, y: np.ndarray
                ) -> tuple[TanhMlp, TrainingReport]:
         c = self.config
+        if c.method == "lm-normal":
+            return self._solve_normal(net, xn, yn, y)
         m = yn.size
         if c.method == "lm" and m < net.n_params:
             raise InvalidInput(f"method 'lm' needs at least as many residuals as weights: "
@@ -170,15 +219,18 @@ class LmTrainer:
                 rmatvec=lambda u: fixed.weight_vjp(xn, np.ravel(u), acts),
             )
 
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         kwargs: dict[str, Any] = dict(ftol=c.ftol, xtol=c.xtol, gtol=c.gtol,
                                       max_nfev=c.max_evaluations)
         if c.method == "lm":
             kwargs.update(method="lm", jac=dense_jac)
         else:
             if c.time_budget > 0:
+                clock = time.process_time if c.budget_clock == "cpu" else time.perf_counter
+                b0 = clock()
+
                 def stop(intermediate_result) -> None:  # noqa: ARG001 - scipy's signature
-                    if time.perf_counter() - t0 > c.time_budget:
+                    if clock() - b0 > c.time_budget:
                         raise StopIteration
                 kwargs["callback"] = stop
             if c.method == "trf":
@@ -192,4 +244,33 @@ class LmTrainer:
         err = out.predict_normalised(xn) * out.y_scale + out.y_mean - y
         rmse = float(np.sqrt(np.mean(np.sum(err ** 2, axis=1))))
         return out, TrainingReport(rmse, int(result.nfev), seconds, int(result.status),
-                                   str(result.message))
+                                   str(result.message),
+                                   cpu_seconds=time.process_time() - c0)
+
+    def _solve_normal(self, net: TanhMlp, xn: np.ndarray, yn: np.ndarray, y: np.ndarray
+                      ) -> tuple[TanhMlp, TrainingReport]:
+        c = self.config
+        n_val = int(round(c.validation_fraction * len(xn)))
+        if n_val >= len(xn):
+            n_val = 0
+        order = np.random.default_rng(c.seed + 1).permutation(len(xn))
+        val, fit = order[:n_val], order[n_val:]
+        solver = NormalEquationsLm(
+            batch=c.batch, max_iterations=c.max_evaluations, time_budget=c.time_budget,
+            initial_damping=c.initial_damping, patience=c.patience,
+            curvature_samples=c.curvature_samples, curvature_dtype=c.curvature_dtype,
+            gradient_tol=c.gtol, step_tol=c.xtol, seed=c.seed,
+            clock=time.process_time if c.budget_clock == "cpu" else time.perf_counter)
+        t0, c0 = time.perf_counter(), time.process_time()
+        res = solver.run(net, xn[fit], yn[fit], xn[val] if n_val else None,
+                         yn[val] if n_val else None)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        out = net.with_params(res.theta)
+
+        def rmse(idx: np.ndarray) -> float:
+            err = out.predict_normalised(xn[idx]) * out.y_scale + out.y_mean - y[idx]
+            return float(np.sqrt(np.mean(np.sum(err ** 2, axis=1))))
+
+        return out, TrainingReport(
+            rmse(fit), res.evaluations, wall, 0, res.reason,
+            rmse(val) if n_val else float("nan"), res.iterations, res.rejected, res.damping, cpu)
