@@ -93,3 +93,29 @@ def test_goal_to_a_paused_simulators_controller_ends(ros_probe, ros_domain_id):
         assert ros_probe.wait_for(result.done, 15.0), ctrl.output()[-3000:]
         req.data = False
         ros_probe.call("/sim/set_paused", SetBool, req, 30.0)
+
+
+@pytest.mark.integration
+def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(ros_probe,
+                                                                             ros_domain_id):
+    """A ~/set_parameters request with a ParameterValue of an unknown type (254) made rclpy's
+    parameter service raise and killed every node of the graph (fuzzer, 2026-12-03); now it
+    is refused with the reason and the node answers the next request."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    from icub_pmp.testing import NodeGraph
+
+    with NodeGraph(["posture_publisher"], {}) as graph:
+        bad = SetParameters.Request(parameters=[Parameter(
+            name="rate", value=ParameterValue(type=254, double_value=1.0))])
+        res = ros_probe.call("/posture_publisher/set_parameters", SetParameters, bad, 60.0)
+        assert len(res.results) == 1 and not res.results[0].successful
+        assert "invalid request" in res.results[0].reason, res.results[0].reason
+        assert graph.procs["posture_publisher"].alive(), graph.outputs()
+        good = SetParameters.Request(parameters=[Parameter(
+            name="no_such_parameter", value=ParameterValue(
+                type=ParameterType.PARAMETER_DOUBLE, double_value=1.0))])
+        res = ros_probe.call("/posture_publisher/set_parameters", SetParameters, good, 30.0)
+        assert len(res.results) == 1 and not res.results[0].successful
+        assert graph.procs["posture_publisher"].alive(), graph.outputs()

@@ -27,6 +27,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 
 from icub_pmp.errors import IcubPmpError, InvalidInput
+from icub_pmp.ros.node_runner import guard_parameter_services
 from icub_pmp.ros.raw_messages import RawJointStateReader, raw_header_stamp_ns, read_joint_state
 
 __all__ = ["JointStateCache", "MeasuredState"]
@@ -68,6 +69,7 @@ class JointStateCache:
                          context=node.context, use_global_arguments=False)
         self.node.create_subscription(JointState, topic, self._on_data,
                                       qos_profile_sensor_data, raw=True)
+        guard_parameter_services(self.node)
         self._executor = EventsExecutor(context=node.context)
         self._executor.add_node(self.node)
         self._stop = False

@@ -23,7 +23,7 @@ from rclpy.node import Node
 
 from icub_pmp.errors import ConfigError
 
-__all__ = ["spin_node", "run_node"]
+__all__ = ["spin_node", "run_node", "guard_parameter_services"]
 
 N = TypeVar("N", bound=Node)
 
@@ -52,6 +52,7 @@ def spin_node(
     failed: list[BaseException] = []
     try:
         node = factory()
+        guard_parameter_services(node)
         executor = EventsExecutor()
         executor.add_node(node)
         if worker is not None:
@@ -84,6 +85,38 @@ def spin_node(
         raise SystemExit(1)
 
 
+def guard_parameter_services(node: Node) -> None:
+    """Make rclpy's parameter services answer a request they cannot parse instead of raising.
+
+    rclpy's own ``~/set_parameters`` (and the other parameter services) raise from their
+    callback on a malformed request, e.g. a ``ParameterValue`` of an unknown type (found by
+    the fuzzer: ``type: 254`` killed every node), and an exception from a callback ends the
+    executor's spin. Each callback is wrapped: such a request is answered with every change
+    refused and the reason (or an empty answer for the read-only services), and a warning."""
+    from rcl_interfaces.msg import SetParametersResult
+
+    for srv in list(node.services):
+        name = srv.srv_name.rsplit("/", 1)[-1]
+        if name not in ("set_parameters", "set_parameters_atomically", "get_parameters",
+                        "get_parameter_types", "describe_parameters", "list_parameters"):
+            continue
+
+        def guarded(request, response, _cb=srv.callback, _name=name):  # noqa: ANN001, ANN202
+            try:
+                return _cb(request, response)
+            except Exception as exc:  # a malformed request: refuse it, keep serving
+                reason = f"invalid request: {type(exc).__name__}: {exc}"
+                node.get_logger().warning(f"~/{_name}: {reason}")
+                if _name == "set_parameters":
+                    response.results = [SetParametersResult(successful=False, reason=reason)
+                                        for _ in request.parameters]
+                elif _name == "set_parameters_atomically":
+                    response.result = SetParametersResult(successful=False, reason=reason)
+                return response
+
+        srv.callback = guarded
+
+
 def _run_worker(worker: Worker, node: Node, stop: threading.Event,
                 failed: list[BaseException]) -> None:
     """The worker thread: on a failure (not during shutdown) log it and record it."""
@@ -111,6 +144,7 @@ def run_node(factory: Callable[[], Node], args: list[str] | None = None,
     node = None
     try:
         node = factory()
+        guard_parameter_services(node)
         rclpy.spin(node, executor=executor() if executor is not None else None)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -14,8 +14,9 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["FuzzTarget", "FUZZ_GRAPH", "FUZZ_PARAMS", "PERIPERSONAL_FUZZ_MAPS", "services",
-           "actions", "topics", "effort_topic", "good_reach", "good_solve_pose", "good_look_at",
-           "fuzz_services", "fuzz_actions", "fuzz_topics", "fuzz_effort"]
+           "actions", "topics", "parameter_services", "effort_topic", "good_reach",
+           "good_solve_pose", "good_look_at", "fuzz_services", "fuzz_actions", "fuzz_topics",
+           "fuzz_effort"]
 
 #: the nodes fuzzed, started as scripts/graph.sh starts them, except: cameras off (images are
 #: fuzzed) and the Cartesian solver on the CasADi VM (``codegen: false``: a fuzzed request on a
@@ -77,6 +78,7 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
         FuzzTarget("/sim/set_paused", SetBool, ("sim_bridge",), 10.0, n(4)),
         FuzzTarget("/impedance_controller/hold", Trigger, ("impedance_controller",), 10.0,
                    n(3)),
+        FuzzTarget("/wrench_estimator/calibrate", Trigger, ("wrench_estimator",), 30.0, n(2)),
         FuzzTarget("/pmp/reach", Reach, ("pmp_planner",), 30.0, n(20)),
         FuzzTarget("/cartesian/solve_pose", SolvePose, ("cartesian_solver",), 15.0, n(12)),
         FuzzTarget("/cartesian/go_to_pose", GoToPose, ("cartesian_solver",), 20.0, n(10)),
@@ -95,6 +97,15 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
         FuzzTarget("/body_schema/start_babbling", StartBabbling, ("body_schema",), 10.0, n(8)),
         FuzzTarget("/body_schema/stop_babbling", Trigger, ("body_schema",), 10.0, n(3)),
     ]
+
+
+def parameter_services(nodes: list[str], scale: float = 1.0) -> list[FuzzTarget]:
+    """Every node's ``~/set_parameters`` (rcl_interfaces/SetParameters): drawn names and
+    values; a node validates each change it accepts (config/<node>.yaml's dataclasses)."""
+    from rcl_interfaces.srv import SetParameters
+
+    return [FuzzTarget(f"/{node}/set_parameters", SetParameters, (node,), 10.0,
+                       max(1, int(round(4 * scale)))) for node in nodes]
 
 
 def actions(scale: float = 1.0) -> list[FuzzTarget]:
@@ -120,7 +131,7 @@ def topics(scale: float = 1.0) -> list[FuzzTarget]:
     from sensor_msgs.msg import CameraInfo, Image, JointState
     from trajectory_msgs.msg import JointTrajectory
 
-    from icub_interfaces.msg import Obstacles
+    from icub_interfaces.msg import Obstacles, SimStatus
 
     def n(k: int) -> int:
         return max(1, int(round(k * scale)))
@@ -136,6 +147,8 @@ def topics(scale: float = 1.0) -> list[FuzzTarget]:
         FuzzTarget("/impedance_controller/velocity_command", JointState,
                    ("impedance_controller",), cases=n(20)),
         FuzzTarget("/ft/r_arm_ft", WrenchStamped, ("wrench_estimator",), cases=n(20)),
+        FuzzTarget("/ft/l_arm_ft", WrenchStamped, ("wrench_estimator",), cases=n(10)),
+        FuzzTarget("/sim/status", SimStatus, ("impedance_controller",), cases=n(15)),
         # /imu is left out: the estimator subscribes to it only with gravity_source: imu,
         # not the shipped config (a publisher there reaches no node)
         FuzzTarget("/cam/left/image_raw", Image, ("motion_segmenter", "body_schema"),
@@ -202,7 +215,7 @@ def fuzz_services(fuzzer: Any, scale: float = 1.0) -> list[str]:
     running (a drawn /sim/set_paused may have paused it) and no babbling."""
     from std_srvs.srv import SetBool, Trigger
 
-    targets = services(scale)
+    targets = services(scale) + parameter_services(list(fuzzer.graph.procs), scale)
     for t in targets:
         fuzzer.fuzz_service(t.name, t.type, t.nodes[0], t.budget, t.cases)
     fuzzer.probe.call("/sim/set_paused", SetBool, SetBool.Request(data=False), 30.0)

@@ -46,9 +46,14 @@ def fuzz_settings(max_examples: int) -> settings:
 
 def rejection_message(response: Any) -> tuple[bool, str] | None:
     """(rejected?, message) of a response or result with ``success``/``message``,
-    ``error_code``/``error_string`` or ``success``/``outcome``; None if it has neither."""
+    ``error_code``/``error_string``, ``success``/``outcome`` or SetParameters' ``results``
+    (``successful``/``reason`` each); None if it has none of them."""
     if hasattr(response, "error_code"):
         return response.error_code != 0, str(getattr(response, "error_string", ""))
+    results = getattr(response, "results", None)  # rcl_interfaces/SetParameters
+    if isinstance(results, (list, tuple)) and all(hasattr(r, "successful") for r in results):
+        bad = [r for r in results if not r.successful]
+        return bool(bad), "; ".join(str(r.reason) for r in bad)
     if hasattr(response, "success"):
         return (not response.success), str(getattr(response, "message", ""))
     return None
@@ -181,13 +186,16 @@ class InterfaceFuzzer:
 
     # ------------------------------------------------------------------ topics
     def _publisher(self, t: InterfaceTally, topic: str, msg_type: Any) -> Any:
-        """A reliable publisher on ``topic``, once a subscriber matched; when none matched in
-        30 s (a wrong topic name, a node that does not subscribe) it counts as a hang: the
-        cases would reach no node."""
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        """A reliable, transient-local publisher on ``topic``, once a subscriber matched;
+        when none matched in 30 s (a wrong topic name, a node that does not subscribe) it
+        counts as a hang: the cases would reach no node."""
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+        # reliable + transient local: matches every subscriber (best effort or reliable,
+        # volatile or latched like /sim/status)
         pub = self.probe.node.create_publisher(
-            msg_type, topic, QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE))
+            msg_type, topic, QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE,
+                                        durability=DurabilityPolicy.TRANSIENT_LOCAL))
         if not self.probe.wait_for(lambda: pub.get_subscription_count() >= 1, 30.0):
             t.hangs += 1
             t.note(f"no subscriber of {topic} matched in 30 s: the cases reach no node")
