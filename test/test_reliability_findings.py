@@ -119,3 +119,40 @@ def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(ros
         res = ros_probe.call("/posture_publisher/set_parameters", SetParameters, good, 30.0)
         assert len(res.results) == 1 and not res.results[0].successful
         assert graph.procs["posture_publisher"].alive(), graph.outputs()
+
+
+@pytest.mark.integration
+def test_robot_state_publisher_drops_corrupt_joint_states(ros_probe, ros_domain_id):
+    """Truncated CDR on /joint_states killed robot_state_publisher (its raw subscription
+    deserialised without a guard; fuzzer, 2026-12-03): now it drops them with a warning and
+    keeps publishing /tf for good ones."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import JointState
+    from tf2_msgs.msg import TFMessage
+
+    from icub_pmp.kinematics.robot_spec import RobotSpec
+    from icub_pmp.testing import NodeGraph
+
+    spec = RobotSpec.load()
+    good = JointState(name=list(spec.upper_body_joints),
+                      position=[0.0] * len(spec.upper_body_joints))
+    raw = serialize_message(good)
+    with NodeGraph(["robot_state_publisher"], {"robot_state_publisher":
+                                                {"use_sim_time": False}}) as graph:
+        pub = ros_probe.node.create_publisher(
+            JointState, "/joint_states", QoSProfile(depth=50,
+                                                    reliability=ReliabilityPolicy.RELIABLE))
+        assert ros_probe.wait_for(lambda: pub.get_subscription_count() >= 1, 60.0)
+        for i in range(1, 20):
+            pub.publish(raw[: (len(raw) * i) // 20])  # truncated CDR
+            time.sleep(0.12)  # past the /tf rate limit, so each one is read
+        time.sleep(1.0)
+        assert graph.procs["robot_state_publisher"].alive(), graph.outputs()
+        got: list = []
+        sub = ros_probe.node.create_subscription(TFMessage, "/tf", got.append, 10)
+        ros_probe.wait_for(lambda: (pub.publish(good), time.sleep(0.1), bool(got))[-1], 30.0)
+        assert got, graph.outputs()
+        assert "cannot deserialise" in graph.procs["robot_state_publisher"].output()
+        ros_probe.destroy(sub)
+        ros_probe.destroy(pub)

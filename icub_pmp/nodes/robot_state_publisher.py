@@ -90,7 +90,10 @@ class RobotStatePublisher(Node):
         if now < self._next_tf:
             return
         try:
-            msg = deserialize_message(data, JointState)
+            try:
+                msg = deserialize_message(data, JointState)
+            except Exception as exc:  # a corrupt serialised message (Fast CDR's RMWError)
+                raise ValueError(f"cannot deserialise it: {exc}") from exc
             validate_joint_state(msg, required=("position",))
         except (IcubPmpError, ValueError, TypeError) as exc:
             self.get_logger().warning(f"dropping /joint_states: {exc}",
