@@ -15,9 +15,14 @@
 3. Soak: reach / squeeze / release / look (/ vision in the full run) cycles on that graph
    (icub_pmp.testing.soak): RSS growth per process, loop-rate drift, warnings, goals answered.
 
+4. Bags and hosts: ``bench/bag.py --quick`` (the recorder SIGKILLed mid-recording, messages
+   lost beyond the last chunk) and ``bench/two_hosts.py --quick`` (the lockstep graph across a
+   veth pair), run from here so one JSON line holds the issue's figures.
+
 Ends with one JSON line: fuzz_cases, fuzz_crashes, fuzz_hangs, fuzz_unclear,
 torque_violations, faults_tried, faults_recovered, recovery_s_max (restart -> the node serves
-again), soak_minutes, rss_growth_mb_per_h_max, loop_rate_drift_pct, and details.
+again), soak_minutes, rss_growth_mb_per_h_max, loop_rate_drift_pct, bag_sigkill_msgs_lost,
+cross_host_lockstep_rtf, and details.
 """
 
 from __future__ import annotations
@@ -116,6 +121,35 @@ def faults(probe: RosProbe, env: dict[str, str], quick: bool, soak_minutes: floa
     }
 
 
+def companions(quick: bool) -> dict:
+    """Phase 4: the crash-safe bags and the two hosts, measured in this run by their own
+    benchmarks (``bench/bag.py``: the recorder SIGKILLed mid-recording;
+    ``bench/two_hosts.py``: the lockstep graph split over a veth pair), each as a subprocess
+    with ``--quick`` (their full runs add longer traffic and a delayed link). Returns their
+    headline keys, or None with the reason when one could not run (e.g. no network
+    namespaces without root)."""
+    import subprocess
+
+    root = Path(__file__).resolve().parent.parent
+    out: dict = {}
+    for bench, keys in (("bag", ("bag_sigkill_msgs_lost", "bag_sigkill_recovered")),
+                        ("two_hosts", ("cross_host_lockstep_rtf", "single_host_lockstep_rtf",
+                                       "cross_host_reach_success",
+                                       "cross_host_rtt_ms_median"))):
+        cmd = [str(root / "scripts" / "env.sh"), "python", f"bench/{bench}.py", "--quick"]
+        proc = subprocess.run(cmd, cwd=root, capture_output=True, text=True, timeout=1800)
+        lines = [ln for ln in proc.stdout.splitlines() if ln.strip().startswith("{")]
+        figures = json.loads(lines[-1]) if lines else {}
+        for k in keys:
+            out[k] = figures.get(k)
+        if proc.returncode != 0 or not lines:
+            out[f"{bench}_error"] = (figures.get("error")
+                                     or f"bench/{bench}.py exited {proc.returncode}: "
+                                        f"{proc.stderr.strip()[-300:]}")
+        print(f"{bench}: " + ", ".join(f"{k} {out[k]}" for k in keys), flush=True)
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true",
@@ -136,6 +170,7 @@ def main() -> int:
             result = {"bench": "reliability", "quick": args.quick, **fuzz(probe, env, scale)}
             if not args.fuzz_only:
                 result.update(faults(probe, env, args.quick, soak_minutes))
+                result.update(companions(args.quick))
         finally:
             probe.close()
     result["load_start"] = round(load0, 2)
