@@ -272,12 +272,23 @@ class FaultInjector:
         if rejoined:
             out.rejoin_s = rejoined[0]
         ok, text = self.reach()
-        if not ok:  # a goal sent while the graph was still settling: one more try
+        if not ok:  # a goal sent while the graph was still settling: one more try, once the
+            # controller has left its safe hold and joint states flow (as a user would retry)
+            self.probe.wait_for(self._settled, 15.0)
             ok, text = self.reach()
         out.next_goal = text
         out.recovered = ok and out.others_alive and not out.early_call.startswith("HANG")
         self.probe.destroy(early)
         return out
+
+    def _settled(self) -> bool:
+        """The controller out of its safe hold and the simulator's joint states flowing."""
+        from sensor_msgs.msg import JointState
+
+        with self.status.lock:
+            last = self.status.ctrl[-1] if self.status.ctrl else None
+        return (last is None or last.status != "safe_hold") and self._fresh("/joint_states",
+                                                                            JointState)
 
     def _interrupted(self, sent: Any, node: str) -> str:
         if not sent.done():
