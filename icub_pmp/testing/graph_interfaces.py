@@ -15,8 +15,8 @@ from typing import Any
 
 __all__ = ["FuzzTarget", "FUZZ_GRAPH", "FUZZ_PARAMS", "PERIPERSONAL_FUZZ_MAPS", "services",
            "actions", "topics", "parameter_services", "effort_topic", "good_reach",
-           "good_solve_pose", "good_look_at", "fuzz_services", "fuzz_actions", "fuzz_topics",
-           "fuzz_effort"]
+           "good_solve_pose", "good_look_at", "clear_obstacles", "fuzz_services",
+           "fuzz_actions", "fuzz_topics", "fuzz_effort"]
 
 #: the nodes fuzzed, started as scripts/graph.sh starts them, except: cameras off (images are
 #: fuzzed) and the Cartesian solver on the CasADi VM (``codegen: false``: a fuzzed request on a
@@ -234,8 +234,8 @@ def fuzz_actions(fuzzer: Any, scale: float = 1.0) -> list[str]:
 
 def fuzz_topics(fuzzer: Any, scale: float = 1.0) -> list[str]:
     """Every subscribed topic fuzzed (drawn messages), then the 1 kHz inputs of the
-    controller with out-of-order stamps, a 10x burst and corrupt CDR; returns the tally
-    names."""
+    controller with out-of-order stamps, a 10x burst and corrupt CDR; the planner's obstacle
+    scene is left empty (as found); returns the tally names."""
     from sensor_msgs.msg import JointState
 
     targets = topics(scale)
@@ -248,7 +248,29 @@ def fuzz_topics(fuzzer: Any, scale: float = 1.0) -> list[str]:
         if not got:
             raise AssertionError(f"{topic} is no longer published after the fuzzing")
         names.append(fuzzer.disorder_topic(topic, got[0], nodes).name)
+    clear_obstacles(fuzzer.probe)
     return names
+
+
+def clear_obstacles(probe: Any, timeout: float = 30.0) -> bool:
+    """Publish an empty /pmp/obstacles scene (the planner keeps the last valid one it got,
+    e.g. the fuzzer's last drawn scene); True once a subscriber matched and it was sent."""
+    import time
+
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    from icub_interfaces.msg import Obstacles
+
+    pub = probe.node.create_publisher(
+        Obstacles, "/pmp/obstacles", QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE))
+    try:
+        if not probe.wait_for(lambda: pub.get_subscription_count() >= 1, timeout):
+            return False
+        pub.publish(Obstacles())
+        time.sleep(0.5)
+        return True
+    finally:
+        probe.destroy(pub)
 
 
 def fuzz_effort(fuzzer: Any, scale: float = 1.0) -> list[str]:
