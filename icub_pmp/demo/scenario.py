@@ -511,7 +511,8 @@ def wait_still_target(runner: DemoRunner, after: float, timeout: float = 3.0):  
     end = runner.sim_time() + timeout
 
     def found():  # noqa: ANN202
-        for m in reversed(runner.estimates):
+        # a copy: the probe's spin thread appends to the deque meanwhile
+        for m in reversed(list(runner.estimates)):
             if time_to_sec(m.header.stamp) > after and m.state == "still" and m.points > 0:
                 return m
         return None
@@ -546,7 +547,8 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
         return PhaseResult(name, False, "no still stereo target of the cylinder after it "
                            "stopped (/motion/target/estimate)", sim_start=t0)
     stamp = time_to_sec(est.header.stamp)
-    first = min((time_to_sec(m.header.stamp) for m in runner.estimates), default=stamp)
+    first = min((time_to_sec(m.header.stamp) for m in list(runner.estimates)),
+                default=stamp)
     position = np.array([est.position.x, est.position.y, est.position.z])
     top = np.array([est.top.x, est.top.y, est.top.z])
     target_error = float(np.linalg.norm(position - runner.object_position_at("cylinder", stamp)))
