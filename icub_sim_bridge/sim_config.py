@@ -44,7 +44,7 @@ class SimConfig(ConfigBase):
     camera_threaded: bool = True  # render off the physics thread
     # --- hand markers (body-schema babbling: the coloured marker the cameras track) ----------
     hand_marker_radius: float = 0.015  # [m] sphere on each hand, visual only; 0 = none
-    hand_marker_offset: tuple[float, ...] = (0.0, -0.03, 0.0)  # [m] in the hand_dh_frame (back)
+    hand_marker_offset: tuple[float, ...] = (-0.02, -0.02, 0.04)  # [m] in the hand_dh_frame
     visual_mesh_cell: float = 0.008  # [m] vertex-clustering cell of the rendered meshes
     # --- joint physics (see icub_sim_bridge/model_builder.py for sources) --------------------
     joint_damping: float = -1.0  # [N m s/rad]; < 0: the URDF <dynamics damping> (1.0)

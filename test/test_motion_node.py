@@ -160,11 +160,37 @@ def _set_params(probe, node: str, **values):
             pv = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=v)
         elif isinstance(v, int):
             pv = ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=v)
+        elif isinstance(v, str):
+            pv = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=v)
         else:
             pv = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=v)
         params.append(Parameter(name=name, value=pv))
     return probe.call(f"/{node}/set_parameters", SetParameters,
                       SetParameters.Request(parameters=params)).results
+
+
+def test_node_eye_calibration_file(segmenter_node, ros_probe, tmp_path):
+    """``eye_calibration_file`` at run time: a missing file is an error in the log and the
+    node goes on with the nominal cameras; a calibration file is loaded and said so; back to
+    '' (the nominal cameras) the node keeps segmenting."""
+    from icub_pmp.vision.eye_calibration import CameraCorrection, EyeCalibration
+
+    res = _set_params(ros_probe, "motion_segmenter",
+                      eye_calibration_file=str(tmp_path / "missing.yaml"))
+    assert res[0].successful, res[0].reason
+    assert segmenter_node.wait_for_output("no such file; using the nominal cameras", 10.0), \
+        segmenter_node.output()
+    assert segmenter_node.alive()
+    calib = EyeCalibration(CameraCorrection(1.01, 161.0, 119.0, (0.0, 0.01, 0.0)),
+                           CameraCorrection(0.99, 159.0, 121.0, (0.01, 0.0, 0.0)), samples=42,
+                           rms_px=0.4, nominal_rms_px=2.0)
+    path = calib.save(tmp_path / "eyes.yaml")
+    res = _set_params(ros_probe, "motion_segmenter", eye_calibration_file=str(path))
+    assert res[0].successful, res[0].reason
+    assert segmenter_node.wait_for_output("42 marker observations", 10.0), \
+        segmenter_node.output()
+    res = _set_params(ros_probe, "motion_segmenter", eye_calibration_file="")
+    assert res[0].successful and segmenter_node.alive()
 
 
 def test_node_with_simulator(segmenter_node, ros_probe, ros_domain_id):

@@ -165,10 +165,15 @@ def test_target_with_the_icub_camera_noise():
         s.close()
 
 
-def _follow_sliding_cylinder(scene) -> None:
-    """The sliding-cylinder scenario and its judging (the test above)."""
+def _follow_sliding_cylinder(scene, calibration=None) -> None:
+    """The sliding-cylinder scenario and its judging (the test above); ``calibration``: an
+    :class:`~icub_pmp.vision.eye_calibration.EyeCalibration` the stereo target uses (None =
+    the nominal cameras)."""
     seg = {s: MotionSegmenter() for s in ("left", "right")}
-    target = StereoTarget(left=scene.camera)
+    if calibration is None:
+        target = StereoTarget(left=scene.camera)
+    else:
+        target = StereoTarget(None, *calibration.intrinsics(scene.camera))
     start, vel = np.array([-0.38, -0.08, -0.03]), np.array([0.0, 0.2, 0.0])
     moving_err, along, still_err = [], [], []
     no_motion = 0
@@ -178,7 +183,8 @@ def _follow_sliding_cylinder(scene) -> None:
         scene.pose(LOOK_DOWN, {"cylinder": centre, "box": [-0.52, -0.40, -0.05]})
         f = scene.render()
         rl, rr = seg["left"].process(f.left), seg["right"].process(f.right)
-        res = target.process(t, f.left, f.right, rl, rr, f.poses)
+        poses = f.poses if calibration is None else calibration.poses(f.poses)
+        res = target.process(t, f.left, f.right, rl, rr, poses)
         tg = res.target
         if 0.3 <= t <= 0.9:
             assert tg.valid and tg.state == "moving", (k, tg.state, res.note)

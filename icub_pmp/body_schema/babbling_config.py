@@ -44,7 +44,7 @@ class BabblingConfig(ConfigBase):
     seed: int = 0
     look_at_hand: bool = True
     look_duration: float = 0.0
-    marker_offset: tuple[float, ...] = (0.0, -0.03, 0.0)
+    marker_offset: tuple[float, ...] = (-0.02, -0.02, 0.04)
     data_dir: str = ""
     progress_rate: float = 1.0
 

@@ -11,6 +11,7 @@
     icub peri check|allocate|empty|plan-pair ...   peripersonal space queries
     icub bag record|play|info|convert|repair   MCAP bags (rosbag2 layout)
     icub babble --arm right --samples N   motor babbling for the learned body schema
+    icub calibrate-eyes DATASET    fit the eye cameras to the hand marker seen while babbling
 
 VALUES use ros2cli's YAML syntax, e.g. ``"{target: box, wrench: {force: {z: 1.0}}}"``.
 
@@ -33,7 +34,7 @@ __all__ = ["main", "build_parser"]
 
 #: subcommand modules of icub_pmp.cli, in the order of ``icub --help``
 SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "peri",
-               "bag", "babble")
+               "bag", "babble", "calibrate_eyes")
 
 
 def build_parser() -> argparse.ArgumentParser:

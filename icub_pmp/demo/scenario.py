@@ -58,6 +58,9 @@ GRAPH = [
     "robot_state_publisher",
 ]
 
+#: the eye calibration of the ``icub`` realism preset's robot (seed 0), relative to the repository
+ICUB_EYE_CALIBRATION = "config/eye_calibration/icub_seed0.yaml"
+
 #: judging of the vision reach against the object's ground truth [m]
 VISION_ARRIVAL_TOLERANCE = 0.02
 VISION_TARGET_TOLERANCE = 0.01
@@ -594,15 +597,19 @@ def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]
     controller: dict[str, object] = {"lockstep": True, "use_sim_time": True, "mode": "position"}
     if realism is not None:
         sim["realism.preset"] = realism
+    segmenter: dict[str, object] = {"use_sim_time": True}
     if realism == "icub":  # the robot's joint friction, added back by the torque loop
         controller["friction_compensation"] = True
+        # the preset's cameras differ from camera_info: this robot's eye calibration
+        # (icub calibrate-eyes; docs/decisions/0057)
+        segmenter["eye_calibration_file"] = ICUB_EYE_CALIBRATION
     return {
         "sim_bridge": sim,
         "impedance_controller": controller,
         "wrench_estimator": {"use_sim_time": True},
         "pmp_planner": {"use_sim_time": True},
         "cartesian_solver": {"use_sim_time": True},
-        "motion_segmenter": {"use_sim_time": True},
+        "motion_segmenter": segmenter,
         # a look_at's wait is bounded in wall time: under load the lockstep graph may run at a
         # few per cent of real time
         "gaze_controller": {"use_sim_time": True, "wait_timeout": 180.0},

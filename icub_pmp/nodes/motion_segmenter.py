@@ -25,6 +25,8 @@ resets the segmenters and the target.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from geometry_msgs.msg import PointStamped
 from rclpy.node import Node
@@ -34,6 +36,7 @@ from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
 from icub_interfaces.msg import MotionBlob as MotionBlobMsg
 from icub_interfaces.msg import MotionBlobs as MotionBlobsMsg
 from icub_interfaces.msg import VisualTarget
+from icub_pmp.config import repo_root
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
 from icub_pmp.ros.conversions import (
@@ -53,6 +56,7 @@ from icub_pmp.vision import (
     StereoTargetConfig,
     TrackedObject,
 )
+from icub_pmp.vision.eye_calibration import EyeCalibration
 from icub_pmp.vision.head_cameras import HeadCameras
 
 __all__ = ["MotionSegmenterNode", "main", "blobs_to_msg"]
@@ -90,7 +94,8 @@ class MotionSegmenterNode(Node):
         self.params = ConfigParameters(self, (MotionSegmenterConfig, StereoTargetConfig),
                                        on_change=self._on_config_change)
         self.cameras = HeadCameras()
-        self._reset(self.config)
+        self.nominal = {s: CameraIntrinsics() for s in SIDES}
+        self._reset(self.config, self.stereo_config)
         sd = qos_profile_sensor_data
         self.pub_mask = {s: self.create_publisher(Image, f"/motion/{s}/mask", sd) for s in SIDES}
         self.pub_blobs = {
@@ -129,20 +134,47 @@ class MotionSegmenterNode(Node):
         """The stereo target's configuration."""
         return self.params.get(StereoTargetConfig)
 
-    def _reset(self, config: MotionSegmenterConfig) -> None:
-        """Fresh segmenters, target and default intrinsics for ``config``."""
+    def _reset(self, config: MotionSegmenterConfig, stereo: StereoTargetConfig) -> None:
+        """Fresh segmenters, target and default intrinsics for ``config`` and ``stereo``."""
         self.segmenters = {s: MotionSegmenter(config) for s in SIDES}
         cam = CameraIntrinsics(width=config.image_width, height=config.image_height,
                                cx=config.image_width / 2.0, cy=config.image_height / 2.0)
-        self.intrinsics = {s: cam for s in SIDES}
-        self.target = StereoTarget(self.stereo_config, cam, cam)
+        self.nominal = {s: cam for s in SIDES}
+        self.calibration = self._load_calibration(stereo.eye_calibration_file)
+        self.intrinsics = self._calibrated_intrinsics()
+        self.target = StereoTarget(stereo, self.intrinsics["left"],
+                                   self.intrinsics["right"])
         self._latest: dict[str, tuple[float, np.ndarray, MotionBlobs] | None] = {
             s: None for s in SIDES}
         self._paired_stamp: float | None = None
 
+    def _load_calibration(self, path: str) -> EyeCalibration | None:
+        """The eye calibration of ``path`` (None = nominal cameras); a file that cannot be
+        read is reported and the nominal cameras are used (the node keeps running)."""
+        if not path:
+            return None
+        file = Path(path) if Path(path).is_absolute() else repo_root() / path
+        try:
+            calib = EyeCalibration.load(file)
+        except IcubPmpError as exc:
+            self.get_logger().error(f"eye_calibration_file: {exc}; using the nominal cameras "
+                                    "(camera_info), 3-D targets may be centimetres off")
+            return None
+        self.get_logger().info(f"eye calibration {file}: {calib.samples} marker observations, "
+                               f"reprojection {calib.rms_px:.2f} px (nominal "
+                               f"{calib.nominal_rms_px:.2f} px)")
+        return calib
+
+    def _calibrated_intrinsics(self) -> dict[str, CameraIntrinsics]:
+        """Each eye's intrinsics: camera_info's, corrected by the eye calibration if any."""
+        if self.calibration is None:
+            return dict(self.nominal)
+        left, right = self.calibration.intrinsics(self.nominal["left"], self.nominal["right"])
+        return {"left": left, "right": right}
+
     def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
-        if new != old:
-            self._reset(self.config)
+        if new != old:  # called before the new values are stored: build from ``new``
+            self._reset(*new)
             self.get_logger().info("parameters changed: segmenters and target reset")
 
     # ------------------------------------------------------------------ callbacks
@@ -155,8 +187,9 @@ class MotionSegmenterNode(Node):
             return
         cam = CameraIntrinsics(width=int(msg.width), height=int(msg.height), fx=k[0], fy=k[4],
                                cx=k[2], cy=k[5])
-        if cam != self.intrinsics[side]:
-            self.intrinsics[side] = cam
+        if cam != self.nominal[side]:
+            self.nominal[side] = cam
+            self.intrinsics = self._calibrated_intrinsics()
             self.target.left, self.target.right = self.intrinsics["left"], \
                 self.intrinsics["right"]
 
@@ -206,6 +239,8 @@ class MotionSegmenterNode(Node):
             return
         try:
             poses = self.cameras.poses(state.positions)
+            if self.calibration is not None:
+                poses = self.calibration.poses(poses)
             segments = self._arm_segments(state.positions)
             res = self.target.process(left[0], left[1], right[1], left[2], right[2], poses,
                                       segments)

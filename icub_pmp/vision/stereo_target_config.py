@@ -71,6 +71,10 @@ class StereoTargetConfig(ConfigBase):
             this [s].
         joint_state_timeout: head/eye joint states farther than this from an image's stamp give
             no 3-D target [s].
+        eye_calibration_file: the eye cameras as calibrated (``icub calibrate-eyes``,
+            :class:`~icub_pmp.vision.eye_calibration.EyeCalibration`); empty = the nominal
+            cameras of ``camera_info`` and the iKin eye chain. A relative path is taken from
+            the repository root.
     """
 
     min_depth: float = 0.2
@@ -102,6 +106,7 @@ class StereoTargetConfig(ConfigBase):
     self_radius: float = 0.07
     stereo_sync_tolerance: float = 0.02
     joint_state_timeout: float = 0.02
+    eye_calibration_file: str = ""
 
     def validate(self) -> None:
         """Check ranges; raise :class:`ConfigError` naming the field."""
