@@ -165,9 +165,9 @@ def test_shipped_icub_calibration_matches_the_icub_cameras(icub_scene):
     preset, then `icub calibrate-eyes`) still describes the preset's cameras: rendered marker
     views triangulate within 3 mm (median) through it, closer than through the nominal model.
     Fails when the preset's camera draws change without a new calibration."""
-    from icub_sim_bridge.harness.marker_views import rendered_marker_observations
     from icub_pmp.config import repo_root
     from icub_pmp.demo.scenario import ICUB_EYE_CALIBRATION
+    from icub_sim_bridge.harness.marker_views import rendered_marker_observations
 
     calib = EyeCalibration.load(repo_root() / ICUB_EYE_CALIBRATION)
     test = rendered_marker_observations(icub_scene, 30, seed=7)
@@ -175,3 +175,57 @@ def test_shipped_icub_calibration_matches_the_icub_cameras(icub_scene):
     nominal = _triangulation_errors(EyeCalibration.nominal(), test)
     assert np.median(err) < 0.003 and np.median(err) < np.median(nominal), (
         np.median(err), np.median(nominal))
+
+
+def test_calibrate_eyes_command_on_a_babbling_dataset(tmp_path, capsys):
+    """`icub calibrate-eyes DATASET -o FILE --json` on a babbling dataset (right-arm postures,
+    the head fixating the marker, pixels through TRUTH's cameras): the file is written and
+    loads, the held-out triangulation is better than the nominal cameras'; an empty dataset and
+    a missing file are one-line errors."""
+    import json
+
+    from icub_pmp.body_schema.babbling import HEAD_JOINTS, BabblingSample, MotorBabbling
+    from icub_pmp.cli.main import main
+    from icub_pmp.gaze.gaze_controller import GazeController
+
+    cams, gaze = HeadCameras(), GazeController()
+    model, spec = cams.model, cams.model.spec
+    joints = spec.arm_joints("right")
+    idx = model.indices(joints)
+    offset = np.array([-0.02, -0.02, 0.04])
+    babbling = MotorBabbling(joints, model.lower[idx], model.upper[idx], "right", seed=3)
+    rest = dict(spec.posture("rest"))
+    rng = np.random.default_rng(8)
+    while len(babbling.samples) < 40:
+        q = dict(rest)
+        q.update(zip(joints, babbling.next_target()))
+        pose = model.frame_pose(model.q_from_dict(q), spec.hand_frame("right"))
+        p = pose.translation + pose.rotation @ offset
+        if p[0] > -0.15:
+            continue
+        sol = gaze.solve(p, q)
+        head = dict(zip(HEAD_JOINTS, [*sol.neck, *sol.eyes]))
+        head["eyes_version"] += rng.uniform(-0.1, 0.1)
+        poses = cams.poses({**q, **head})
+        uv = np.concatenate([TRUTH.left.project(poses.T_root_left, p[None], NOMINAL)[0],
+                             TRUTH.right.project(poses.T_root_right, p[None], NOMINAL)[0]])
+        if not np.all(np.isfinite(uv)):
+            continue
+        babbling.record(BabblingSample(0.0, np.array([q[j] for j in joints]),
+                                       np.array([head[j] for j in HEAD_JOINTS]), uv, p, p))
+    fixed = {j: v for j, v in rest.items() if j not in joints}
+    data = babbling.save(tmp_path / "babble.npz", {
+        "hand_frame": spec.hand_frame("right"), "marker_offset": offset.tolist(),
+        "fixed": fixed})
+    out = tmp_path / "eyes.yaml"
+    assert main(["calibrate-eyes", str(data), "-o", str(out), "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert EyeCalibration.load(out).samples >= 36
+    assert figures["calibrated_triangulation_mm_median"] < 0.5 * figures[
+        "nominal_triangulation_mm_median"], figures
+    empty = MotorBabbling(joints, model.lower[idx], model.upper[idx], "right").save(
+        tmp_path / "empty.npz", {"hand_frame": "r_hand_dh_frame", "marker_offset": [0, 0, 0]})
+    assert main(["calibrate-eyes", str(empty)]) == 1
+    assert "no samples" in capsys.readouterr().err
+    assert main(["calibrate-eyes", str(tmp_path / "missing.npz")]) == 1
+    assert "icub: error:" in capsys.readouterr().err
