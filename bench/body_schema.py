@@ -62,15 +62,12 @@ from icub_pmp.body_schema import (  # noqa: E402
     LmTrainer,
     LmTrainerConfig,
     load_dataset,
+    perturbed_cameras,
+    stereo_samples,
 )
-from icub_pmp.errors import InvalidInput  # noqa: E402
 from icub_pmp.gaze.gaze_controller import GazeController  # noqa: E402
 from icub_pmp.kinematics import IcubModel, RobotSpec  # noqa: E402
-from icub_pmp.kinematics.eye_kinematics import (  # noqa: E402
-    CameraIntrinsics,
-    EyeKinematics,
-    project_point,
-)
+from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, EyeKinematics  # noqa: E402
 from icub_pmp.peripersonal import analytic_babbling  # noqa: E402
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal  # noqa: E402
 from icub_pmp.pmp.pinocchio_provider import PinocchioJacobianProvider  # noqa: E402
@@ -135,72 +132,31 @@ def pmp_errors(planner: PmpPlanner, truth, targets, frame) -> np.ndarray:
     return np.array(out)
 
 
-def stereo_set(n: int, seed: int, eyes: EyeKinematics, T_root_head: np.ndarray,
-               hands: np.ndarray, cams: dict, rot_left: np.ndarray, noise: float, gaze,
-               q_head: np.ndarray):
-    """Stereo samples of the hand positions ``hands`` seen by the real cameras ``cams``
-    (intrinsics per side, left extrinsic rotation ``rot_left``), the eyes fixating each hand
-    (the gaze controller's closed-form eyes, head at ``q_head``) up to a random 0.03 rad:
-    inputs (n, 7), hands (n, 3) root_link, the nominal camera poses (n, 2, 4, 4)."""
-    rng = np.random.default_rng(seed)
-    x, p, poses = [], [], []
-    k = 0
-    while len(x) < n:
-        if k > 50 * n:
-            raise InvalidInput(f"stereo_set: only {len(x)} of {n} hands in view of both cameras")
-        h = hands[k % len(hands)]
-        k += 1
-        if h[0] > -0.1:  # behind the eyes' reach of view: not a sample
-            continue
-        try:
-            (tilt, version, verg), _ = gaze.eyes_for(q_head, h)
-        except InvalidInput:
-            continue
-        tilt, version = tilt + rng.normal(0, 0.03), version + rng.normal(0, 0.03)
-        try:
-            Tn = {s: eyes.T_root_camera(T_root_head, s, tilt, version, verg)
-                  for s in ("left", "right")}
-        except InvalidInput:
-            continue
-        Tr = dict(Tn)
-        Tr["left"] = Tn["left"].copy()
-        Tr["left"][:3, :3] = Tn["left"][:3, :3] @ rot_left
-        try:
-            uv = [project_point(Tr[s], h, cams[s]) + rng.normal(0, noise, 2)
-                  for s in ("left", "right")]
-        except InvalidInput:
-            continue
-        if not all(0 <= u[0] < 320 and 0 <= u[1] < 240 for u in uv):
-            continue
-        x.append(np.r_[uv[0], uv[1], tilt, version, verg])
-        p.append(h)
-        poses.append([Tn["left"], Tn["right"]])
-    return np.array(x), np.array(p), np.array(poses)
-
-
 def eye_hand_vs_triangulation(hands_train, hands_test, perturbed: bool, evals: int,
-                              model: IcubModel) -> dict:
-    """Errors [mm] (mean, std per axis, head frame) of the learned map and of triangulation."""
+                              model: IcubModel, save: str = "") -> dict:
+    """Errors [mm] (mean, std per axis, head frame) of the learned map and of triangulation;
+    ``save``: write the map there (.npz)."""
     eyes = EyeKinematics.from_model(model)
     T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
     nominal = CameraIntrinsics()
     if perturbed:
-        cams = {"left": CameraIntrinsics(cx=163.0, cy=118.0),
-                "right": CameraIntrinsics(cx=158.0, cy=123.0)}
-        a = np.radians(1.0)
-        rot = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+        cams, rot = perturbed_cameras()
     else:
         cams, rot = {"left": nominal, "right": nominal}, np.eye(3)
     gaze = GazeController()
     q_head, _ = gaze.configuration(RobotSpec.load().posture("rest"))
-    xtr, ptr, _ = stereo_set(len(hands_train), 1, eyes, T_root_head, hands_train, cams, rot, 0.3,
-                             gaze, q_head)
-    xte, pte, poses = stereo_set(len(hands_test), 2, eyes, T_root_head, hands_test, cams, rot,
+    xtr, ptr, _ = stereo_samples(len(hands_train), 1, eyes, T_root_head, hands_train, cams, rot,
                                  0.3, gaze, q_head)
+    xte, pte, poses = stereo_samples(len(hands_test), 2, eyes, T_root_head, hands_test, cams, rot,
+                                     0.3, gaze, q_head)
     R, t = T_root_head[:3, :3], T_root_head[:3, 3]
     to_head = (lambda p: (p - t) @ R)  # noqa: E731 - root_link -> head frame, (n, 3)
     m, _ = EyeHandMap.train(xtr, to_head(ptr), "head",
-                            trainer=LmTrainer(LmTrainerConfig(max_evaluations=evals)))
+                            trainer=LmTrainer(LmTrainerConfig(max_evaluations=evals)),
+                            camera={"width": nominal.width, "height": nominal.height,
+                                    "fx": nominal.fx, "fy": nominal.fy})
+    if save:
+        m.save(save)
     err_map = (m.locate(xte) - to_head(pte)) * 1e3
     tri = StereoTriangulator(nominal, nominal)
     tri_p = np.array([tri.triangulate(tuple(x[:2]), tuple(x[2:4]), T[0], T[1]).position

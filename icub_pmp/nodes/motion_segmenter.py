@@ -18,9 +18,13 @@ publishes   /motion/left/mask, /motion/right/mask (sensor_msgs/Image mono8, 255 
             /motion/target/estimate (icub_interfaces/VisualTarget): the same with its
             covariance, top face, size, velocity and state.
 
-Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig` and of
-:class:`~icub_pmp.vision.StereoTargetConfig` (``config/motion_segmenter.yaml``); a change
-resets the segmenters and the target.
+Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig`, of
+:class:`~icub_pmp.vision.StereoTargetConfig` and of
+:class:`~icub_pmp.body_schema.eye_hand_target.EyeHandTargetConfig`
+(``config/motion_segmenter.yaml``); a change resets the segmenters and the target.
+``target_source: eye_hand_map`` makes the object's pixel pairs points through the eye-hand map
+learned from babbling (force paper eq 12) instead of ray triangulation; a map that cannot be
+used (no file, another camera setup) is a warning and the node stays on triangulation.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
 from icub_interfaces.msg import MotionBlob as MotionBlobMsg
 from icub_interfaces.msg import MotionBlobs as MotionBlobsMsg
 from icub_interfaces.msg import VisualTarget
+from icub_pmp.body_schema.eye_hand_target import EyeHandPoints, EyeHandTargetConfig
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
 from icub_pmp.ros.conversions import (
@@ -87,8 +92,9 @@ class MotionSegmenterNode(Node):
 
     def __init__(self) -> None:
         super().__init__("motion_segmenter")
-        self.params = ConfigParameters(self, (MotionSegmenterConfig, StereoTargetConfig),
-                                       on_change=self._on_config_change)
+        self.params = ConfigParameters(
+            self, (MotionSegmenterConfig, StereoTargetConfig, EyeHandTargetConfig),
+            on_change=self._on_config_change)
         self.cameras = HeadCameras()
         self._reset(self.config)
         sd = qos_profile_sensor_data
@@ -136,9 +142,25 @@ class MotionSegmenterNode(Node):
                                cx=config.image_width / 2.0, cy=config.image_height / 2.0)
         self.intrinsics = {s: cam for s in SIDES}
         self.target = StereoTarget(self.stereo_config, cam, cam)
+        self.eye_hand = self._load_eye_hand(cam)
         self._latest: dict[str, tuple[float, np.ndarray, MotionBlobs] | None] = {
             s: None for s in SIDES}
         self._paired_stamp: float | None = None
+
+    def _load_eye_hand(self, cam: CameraIntrinsics) -> EyeHandPoints | None:
+        """The eye-hand map of ``target_source: eye_hand_map`` (None: triangulation; a map that
+        cannot be used is a warning, and triangulation stays)."""
+        c = self.params.get(EyeHandTargetConfig)
+        if c.target_source != "eye_hand_map":
+            return None
+        try:
+            points = EyeHandPoints.from_file(c.eye_hand_map_file, cam)
+        except IcubPmpError as exc:
+            self.get_logger().warn(f"target_source eye_hand_map: {exc}; the 3-D target stays "
+                                   "on triangulation")
+            return None
+        self.get_logger().info(f"3-D target from the eye-hand map {c.eye_hand_map_file}")
+        return points
 
     def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
         if new != old:
@@ -159,6 +181,13 @@ class MotionSegmenterNode(Node):
             self.intrinsics[side] = cam
             self.target.left, self.target.right = self.intrinsics["left"], \
                 self.intrinsics["right"]
+            if self.eye_hand is not None:
+                try:
+                    EyeHandPoints(self.eye_hand.map, cam)
+                except IcubPmpError as exc:
+                    self.eye_hand = None
+                    self.get_logger().warn(f"/cam/{side}/camera_info: {exc}; the 3-D target "
+                                           "goes back to triangulation")
 
     def _on_image(self, side: str, msg: Image) -> None:
         c = self.config
@@ -207,8 +236,14 @@ class MotionSegmenterNode(Node):
         try:
             poses = self.cameras.poses(state.positions)
             segments = self._arm_segments(state.positions)
+            points_fn = None
+            if self.eye_hand is not None:
+                eyes = [state.positions[j] for j in ("eyes_tilt", "eyes_version",
+                                                     "eyes_vergence")]
+                points_fn = self.eye_hand.points_fn(self.cameras.head_pose(state.positions),
+                                                    eyes)
             res = self.target.process(left[0], left[1], right[1], left[2], right[2], poses,
-                                      segments)
+                                      segments, points_fn)
         except IcubPmpError as exc:
             self.get_logger().warn(f"no 3-D target: {exc}", throttle_duration_sec=5.0)
             return
