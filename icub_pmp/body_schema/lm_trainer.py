@@ -35,7 +35,8 @@ from icub_pmp.body_schema.tanh_mlp import TanhMlp
 from icub_pmp.config import ConfigBase
 from icub_pmp.errors import ConfigError, InvalidInput
 
-__all__ = ["LmTrainerConfig", "TrainingReport", "LmTrainer", "check_dataset"]
+__all__ = ["LmTrainerConfig", "TrainingReport", "LmTrainer", "check_dataset",
+           "validation_split"]
 
 METHODS = ("lm", "trf", "trf-lsmr", "lm-normal")
 
@@ -154,6 +155,19 @@ def check_dataset(x: np.ndarray, y: np.ndarray, n_in: int, n_out: int
     return x, y
 
 
+def validation_split(n: int, fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(validation, fit) indices of ``n`` samples: sample i is held out when draw i of a
+    stream seeded with ``seed`` is below ``fraction``. The split of the first n samples does not
+    change when samples are appended, so training continued on a grown dataset (online
+    adaptation) never validates on samples it fitted before, as a permutation of the grown set
+    would (decision 0054). No fit sample left: no validation."""
+    pick = np.random.default_rng(seed).random(int(n)) < fraction
+    val, fit = np.flatnonzero(pick), np.flatnonzero(~pick)
+    if len(fit) == 0:
+        return val[:0], np.arange(int(n))
+    return val, fit
+
+
 def _scale(v: np.ndarray) -> np.ndarray:
     s = v.std(axis=0)
     return np.where(s > 1e-12, s, 1.0)
@@ -253,14 +267,7 @@ class LmTrainer:
     def _solve_normal(self, net: TanhMlp, xn: np.ndarray, yn: np.ndarray, y: np.ndarray
                       ) -> tuple[TanhMlp, TrainingReport]:
         c = self.config
-        # sample i is a validation sample when draw i of a seeded stream is below the fraction:
-        # the split of a dataset's first n samples does not change when samples are appended,
-        # so training continued on a grown dataset (online adaptation) never validates on
-        # samples it fitted before (a permutation of the grown set would; decision 0054)
-        pick = np.random.default_rng(c.seed + 1).random(len(xn)) < c.validation_fraction
-        val, fit = np.flatnonzero(pick), np.flatnonzero(~pick)
-        if len(fit) == 0:
-            val, fit = val[:0], np.arange(len(xn))
+        val, fit = validation_split(len(xn), c.validation_fraction, c.seed + 1)
         n_val = len(val)
         solver = NormalEquationsLm(
             batch=c.batch, max_iterations=c.max_evaluations, time_budget=c.time_budget,
