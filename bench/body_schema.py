@@ -6,6 +6,8 @@ eye-hand map against geometric triangulation.
     scripts/env.sh python bench/body_schema.py --dataset data/body_schema/babble_right_X.npz
                                                                 # + rates of a ROS babbling run
     scripts/env.sh python bench/body_schema.py --quick --plot   # + PNGs in bench/out/
+    scripts/env.sh python bench/body_schema.py --quick --save-models data/body_schema
+                                                                # + the learned models (.npz)
 
 Data: babbles of the right arm (7 joints uniform within the URDF limits, torso and left arm at
 rest) with the hand (``r_hand_dh_frame``) from pinocchio forward kinematics, held-out test set
@@ -182,6 +184,9 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="small dataset, < 2 min")
     ap.add_argument("--dataset", default="", help="a ROS babbling dataset (.npz) to report")
     ap.add_argument("--plot", action="store_true", help="write PNGs to bench/out/")
+    ap.add_argument("--save-models", default="", metavar="DIR",
+                    help="write the body model (body_right.npz) and the eye-hand maps "
+                         "(eye_hand_nominal.npz, eye_hand_perturbed.npz) to DIR")
     ap.add_argument("--curve", action="store_true",
                     help="+ error vs samples and hidden sizes (each trained within the budget)")
     args = ap.parse_args()
@@ -212,6 +217,8 @@ def main() -> None:
     net, report, err = train_body(METHOD, n_train, hidden)
     body_rmse = rmse_mm(err)
     jac_err = jacobian_error(net, truth, test.q[:200], idx)
+    if args.save_models:
+        net.save(Path(args.save_models) / "body_right.npz")
     print(f"body network 7-{'-'.join(map(str, hidden))}-3 ({METHOD}): {n_train} babbles, "
           f"{report.iterations} iterations ({report.evaluations} evaluations) in "
           f"{report.cpu_seconds:.1f} s CPU / {report.seconds:.1f} s wall (load "
@@ -239,7 +246,8 @@ def main() -> None:
     for name, pert in (("nominal", False), ("perturbed", True)):
         eh[name] = eye_hand_vs_triangulation(train.hand[:n_eh[0]] if q else analytic_babbling(
             "right", n_eh[0], 300, truth).hand, test.hand[:n_eh[1]] if q else analytic_babbling(
-            "right", n_eh[1], 400, truth).hand, pert, 40 if q else 300, truth.icub)
+            "right", n_eh[1], 400, truth).hand, pert, 40 if q else 300, truth.icub,
+            str(Path(args.save_models) / f"eye_hand_{name}.npz") if args.save_models else "")
         print(f"eye-hand {name}: map RMSE {eh[name]['eyehand_rmse']:.1f} mm vs triangulation "
               f"{eh[name]['tri_rmse']:.1f} mm; paper {PAPER['eyehand_err_mm_mean']} mean, "
               f"{PAPER['eyehand_err_mm_std']} std", file=sys.stderr)
