@@ -16,8 +16,9 @@ Jacobian of that model (eq 2). This demo
 3. restarts ``pmp_planner`` with ``jacobian_source: analytic`` (the URDF through pinocchio) and
    reaches the same targets from the same posture;
 4. judges every reach in the physics: the true hand (``r_hand_dh_frame`` of the URDF at the
-   simulator's measured joint angles, /joint_states, after the planner's arrival check) against
-   the target, and prints both planners side by side (also as ``summary.json``).
+   simulator's measured joint angles, /joint_states, after the planner's arrival check; for a
+   model learned from a babbling run, the marker on it, ``marker_offset``) against the target,
+   and prints both planners side by side (also as ``summary.json``).
 
 The targets are fixed (``TARGETS``: above the table, right of the midline, reachable without
 the torso); the vision target is not used here (``make demo``'s vision phase is on the
@@ -61,15 +62,18 @@ class ReachRecord:
 
 
 def body_model(out_dir: Path, model: str = "", dataset: str = "", babbles: int = 3000,
-               budget: float = 30.0, seed: int = 100) -> tuple[Path, str]:
-    """The right-arm body model file the learned planner uses and a line saying where it came
-    from: ``model`` as given (checked to be a right-arm model), else learned from ``dataset``
-    (a ROS babbling run) or from ``babbles`` pinocchio babbles within ``budget`` s of CPU."""
+               budget: float = 30.0, seed: int = 100) -> tuple[Path, str, np.ndarray]:
+    """The right-arm body model file the learned planner uses, a line saying where it came
+    from and the point it stands for in the hand frame [m] (a babbling run's marker offset;
+    0 for pinocchio babbles): ``model`` as given (checked to be a right-arm model), else
+    learned from ``dataset`` (a ROS babbling run) or from ``babbles`` pinocchio babbles within
+    ``budget`` s of CPU."""
     from icub_pmp.body_schema import BodyNetwork, LmTrainer, LmTrainerConfig, load_dataset
 
     if model:
         net = BodyNetwork.load(model, arm="right")
-        return Path(model), f"loaded {model} ({net.info.get('samples', '?')} babbles)"
+        return (Path(model), f"loaded {model} ({net.info.get('samples', '?')} babbles)",
+                np.array(net.info.get("marker_offset", [0.0, 0.0, 0.0]), dtype=float))
     spec = RobotSpec.load()
     urdf = IcubModel(spec)
     joints = spec.right_arm_joints
@@ -80,19 +84,22 @@ def body_model(out_dir: Path, model: str = "", dataset: str = "", babbles: int =
             raise ValueError(f"{dataset}: babbled joints {d.meta.get('joint_names')}, expected "
                              f"the right arm's {list(joints)}")
         q, hand, what = d.learner["q"], d.learner["hand_seen"], f"the babbling run {dataset}"
+        offset = np.array(d.meta.get("marker_offset", [0.0, 0.0, 0.0]), dtype=float)
     else:
         from icub_pmp.peripersonal import analytic_babbling
 
         b = analytic_babbling("right", babbles, seed=seed)
         q, hand, what = b.q, b.hand, f"{babbles} pinocchio babbles"
+        offset = np.zeros(3)
     trainer = LmTrainer(LmTrainerConfig(
         method="lm-normal", max_evaluations=100000, time_budget=budget, budget_clock="cpu",
         curvature_dtype="float32", curvature_samples=min(3000, len(q))))
     net, report = BodyNetwork.train("right", joints, q, hand, urdf.lower[idx], urdf.upper[idx],
                                     spec.hand_frame("right"), trainer=trainer)
+    net.info["marker_offset"] = offset.tolist()
     path = net.save(out_dir / "body_right.npz")
     return path, (f"learned from {what} in {report.cpu_seconds:.0f} s CPU ({report.iterations} "
-                  f"iterations): validation RMSE {report.validation_rmse * 1e3:.2f} mm")
+                  f"iterations): validation RMSE {report.validation_rmse * 1e3:.2f} mm"), offset
 
 
 def _graph_parameters() -> dict[str, dict[str, object]]:
@@ -121,12 +128,14 @@ class _Driver:
             qos_profile_sensor_data)
         self._clients: dict[str, object] = {}
 
-    def true_hand(self) -> np.ndarray:
-        """URDF ``r_hand_dh_frame`` [m] at the latest measured joint angles."""
+    def true_hand(self, offset: np.ndarray) -> np.ndarray:
+        """The point ``offset`` [m] of the URDF ``r_hand_dh_frame`` in root_link [m] at the
+        latest measured joint angles."""
         js = self.js
         q = self.urdf.q_from_dict(dict(zip(js.name, js.position)),
                                   default=self.urdf.posture("rest"))
-        return self.urdf.frame_position(q, self.frame)
+        T = self.urdf.frame_pose(q, self.frame).homogeneous
+        return T[:3, 3] + T[:3, :3] @ offset
 
     def _client(self, name: str, action_type):  # noqa: ANN001, ANN202 - ROS types
         if name not in self._clients:
@@ -152,8 +161,10 @@ class _Driver:
         self.probe.send_goal(self._client("/impedance_controller/follow_joint_trajectory",
                                           FollowJointTrajectory), goal, 600.0)
 
-    def reach(self, planner: str, target: np.ndarray, tau: float) -> ReachRecord:
-        """One right-hand PMP reach, judged on the true hand."""
+    def reach(self, planner: str, target: np.ndarray, tau: float,
+              offset: np.ndarray) -> ReachRecord:
+        """One right-hand PMP reach, judged on the true hand's point ``offset`` (the one the
+        planner's body model stands for)."""
         from icub_interfaces.action import Reach
 
         goal = Reach.Goal()
@@ -164,7 +175,8 @@ class _Driver:
         p.x, p.y, p.z = (float(v) for v in target)
         res = self.probe.send_goal(self._client("/pmp/reach_action", Reach), goal, 900.0).result
         executed = res.outcome in ("reached", "not_reached")
-        true = float(np.linalg.norm(self.true_hand() - target)) if executed else float("nan")
+        true = (float(np.linalg.norm(self.true_hand(offset) - target)) if executed
+                else float("nan"))
         return ReachRecord(planner, [float(v) for v in target], res.outcome, true,
                            float(res.arrival_errors[0]) if res.arrival_errors else float("nan"),
                            float(res.planned_residuals[0]) if res.planned_residuals
@@ -172,9 +184,12 @@ class _Driver:
 
 
 def run_reaches(model_path: Path, targets: np.ndarray, tau: float = 2.0,
+                offset: np.ndarray | None = None,
                 log=print) -> list[ReachRecord]:  # noqa: ANN001 - a print-like callable
     """Start the graph in a private ROS domain, reach ``targets`` with each planner (module
-    doc), stop everything; the records of every reach, learned first."""
+    doc), stop everything; the records of every reach, learned first. ``offset`` [m]: the
+    point of the hand frame the learned model stands for (the analytic planner's is 0)."""
+    learned_offset = np.zeros(3) if offset is None else np.asarray(offset, dtype=float)
     from icub_pmp.ros.probe import RosProbe
 
     records: list[ReachRecord] = []
@@ -199,7 +214,9 @@ def run_reaches(model_path: Path, targets: np.ndarray, tau: float = 2.0,
                     try:
                         for target in targets:
                             drv.rest()
-                            rec = drv.reach(planner, np.asarray(target, dtype=float), tau)
+                            rec = drv.reach(planner, np.asarray(target, dtype=float), tau,
+                                            learned_offset if planner == "learned"
+                                            else np.zeros(3))
                             log(f"learned_reach: {planner:8s} target {np.round(target, 3)}: "
                                 f"{rec.outcome}, true error {rec.true_error * 1e3:.1f} mm")
                             records.append(rec)
@@ -251,13 +268,14 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 2
     try:
-        path, origin = body_model(out, args.model, args.dataset, args.babbles, args.budget)
+        path, origin, offset = body_model(out, args.model, args.dataset, args.babbles,
+                                          args.budget)
     except (IcubPmpError, ValueError) as exc:
         print(f"learned_reach: error: {exc}", file=sys.stderr)
         return 2
     print(f"learned_reach: body model {path}: {origin}", flush=True)
     try:
-        records = run_reaches(path, TARGETS[:args.targets], args.tau,
+        records = run_reaches(path, TARGETS[:args.targets], args.tau, offset,
                               log=lambda s: print(s, flush=True))
     except (TimeoutError, RuntimeError) as exc:
         print(f"learned_reach: error: {exc}", file=sys.stderr)
