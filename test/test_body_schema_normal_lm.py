@@ -137,3 +137,16 @@ def test_subsampled_curvature_still_converges():
     start = NormalEquationsLm.cost(net, xn, yn)
     assert res.train_cost[-1] < 1e-3 * start
     assert list(res.train_cost) == sorted(res.train_cost, reverse=True)
+
+
+def test_validation_split_is_kept_when_samples_are_appended():
+    """Online adaptation trains again on a grown dataset: the first samples' split is the same,
+    so no sample fitted before becomes a validation sample; about the asked share is held out."""
+    from icub_pmp.body_schema.lm_trainer import validation_split
+
+    val_a, fit_a = validation_split(3200, 0.1, 7)
+    val_b, fit_b = validation_split(6400, 0.1, 7)
+    np.testing.assert_array_equal(val_b[val_b < 3200], val_a)
+    np.testing.assert_array_equal(fit_b[fit_b < 3200], fit_a)
+    assert 0.08 < len(val_b) / 6400 < 0.12
+    assert len(validation_split(5, 0.0, 1)[0]) == 0

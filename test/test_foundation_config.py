@@ -7,7 +7,12 @@ import math
 
 import pytest
 
-from icub_pmp.body_schema import BabblingConfig, JacobianSourceConfig, MarkerDetectorConfig
+from icub_pmp.body_schema import (
+    BabblingConfig,
+    EyeHandTargetConfig,
+    JacobianSourceConfig,
+    MarkerDetectorConfig,
+)
 from icub_pmp.cartesian import IkConfig, MinJerkConfig
 from icub_pmp.config import ConfigBase, config_dir, load_params_file
 from icub_pmp.control import ImpedanceControllerConfig
@@ -32,7 +37,7 @@ NODE_CONFIGS: dict[str, tuple[type[ConfigBase], ...]] = {
     "cartesian_solver": (IkConfig, MinJerkConfig, CartesianNodeConfig, ArrivalConfig),
     "gaze_controller": (GazeControllerConfig, GazeNodeConfig),
     "impedance_controller": (ImpedanceControllerConfig,),
-    "motion_segmenter": (MotionSegmenterConfig, StereoTargetConfig),
+    "motion_segmenter": (MotionSegmenterConfig, StereoTargetConfig, EyeHandTargetConfig),
     "peripersonal_space": (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig),
     "pmp_planner": (PmpConfig, PmpNodeConfig, ArrivalConfig, ReachRequestConfig,
                     JacobianSourceConfig),

@@ -18,6 +18,17 @@ from icub_pmp.body_schema.eye_hand_map import (
     EYE_HAND_INPUTS,
     EyeHandMap,
 )
+from icub_pmp.body_schema.eye_hand_samples import (
+    StereoSamples,
+    perturbed_cameras,
+    stereo_samples,
+    view_samples,
+)
+from icub_pmp.body_schema.eye_hand_target import (
+    TARGET_SOURCES,
+    EyeHandPoints,
+    EyeHandTargetConfig,
+)
 from icub_pmp.body_schema.jacobian_source import (
     JACOBIAN_SOURCES,
     JacobianSourceConfig,
@@ -56,6 +67,13 @@ __all__ = [
     "DEFAULT_HIDDEN",
     "EYE_HAND_INPUTS",
     "EyeHandMap",
+    "EyeHandPoints",
+    "EyeHandTargetConfig",
+    "StereoSamples",
+    "TARGET_SOURCES",
+    "perturbed_cameras",
+    "stereo_samples",
+    "view_samples",
     "JACOBIAN_SOURCES",
     "JacobianSourceConfig",
     "LearnedJacobianProvider",

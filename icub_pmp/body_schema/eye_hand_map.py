@@ -36,28 +36,33 @@ class EyeHandMap:
         mlp: the trained network (7 -> 3).
         frame: the head-centred frame of the outputs.
         info: provenance kept in the saved file.
+        camera: the camera setup the pixels come from ({width, height [px], fx, fy [px]};
+            empty: unknown). A map only holds for the cameras it was learned with.
     """
 
-    def __init__(self, mlp: TanhMlp, frame: str, info: Mapping[str, Any] | None = None):
+    def __init__(self, mlp: TanhMlp, frame: str, info: Mapping[str, Any] | None = None,
+                 camera: Mapping[str, float] | None = None):
         if mlp.n_in != len(EYE_HAND_INPUTS) or mlp.n_out != 3:
             raise InvalidInput(f"eye-hand map: expected 7 inputs -> 3 outputs, got "
                                f"{mlp.n_in} -> {mlp.n_out}")
         self.mlp = mlp
         self.frame = str(frame)
         self.info = dict(info or {})
+        self.camera = {str(k): float(v) for k, v in (camera or {}).items()}
 
     @classmethod
     def train(cls, inputs: np.ndarray, hand: np.ndarray, frame: str,
               hidden: Sequence[int] = DEFAULT_EYE_HAND_HIDDEN,
-              trainer: LmTrainer | None = None) -> tuple["EyeHandMap", TrainingReport]:
+              trainer: LmTrainer | None = None, camera: Mapping[str, float] | None = None
+              ) -> tuple["EyeHandMap", TrainingReport]:
         """Fit eq 12 on ``inputs`` (n, 7) in :data:`EYE_HAND_INPUTS` order and hand positions
-        (n, 3) [m] in ``frame``."""
+        (n, 3) [m] in ``frame``; ``camera`` names the camera setup (class doc)."""
         inputs, hand = check_dataset(inputs, hand, len(EYE_HAND_INPUTS), 3)
         trainer = trainer or LmTrainer()
         mlp, report = trainer.fit(tuple(hidden), inputs, hand)
         info = {"samples": len(inputs), "train_rmse_m": report.rmse, "train_s": report.seconds,
                 "method": trainer.config.method}
-        return cls(mlp, frame, info), report
+        return cls(mlp, frame, info, camera), report
 
     def locate(self, inputs: np.ndarray) -> np.ndarray:
         """Hand position(s) [m] in :attr:`frame`: (3,) for one input (7,), (n, 3) for (n, 7)."""
@@ -72,11 +77,11 @@ class EyeHandMap:
     def save(self, path: str | Path) -> Path:
         """Write the map to ``path`` (.npz)."""
         meta = {"frame": self.frame, "inputs": list(EYE_HAND_INPUTS),
-                "hidden": list(self.mlp.hidden), "info": self.info}
+                "hidden": list(self.mlp.hidden), "info": self.info, "camera": self.camera}
         return save_model(path, self.mlp, KIND, meta)
 
     @classmethod
     def load(cls, path: str | Path) -> "EyeHandMap":
         """Read a map saved by :meth:`save` (:class:`ModelError` if missing or not a map)."""
         mlp, meta = load_model(path, KIND)
-        return cls(mlp, meta.get("frame", "head"), meta.get("info"))
+        return cls(mlp, meta.get("frame", "head"), meta.get("info"), meta.get("camera"))

@@ -35,7 +35,8 @@ from icub_pmp.body_schema.tanh_mlp import TanhMlp
 from icub_pmp.config import ConfigBase
 from icub_pmp.errors import ConfigError, InvalidInput
 
-__all__ = ["LmTrainerConfig", "TrainingReport", "LmTrainer", "check_dataset"]
+__all__ = ["LmTrainerConfig", "TrainingReport", "LmTrainer", "check_dataset",
+           "validation_split"]
 
 METHODS = ("lm", "trf", "trf-lsmr", "lm-normal")
 
@@ -45,7 +46,8 @@ class LmTrainerConfig(ConfigBase):
     """Settings of :class:`LmTrainer`.
 
     Attributes:
-        method: ``lm`` | ``trf`` | ``trf-lsmr`` | ``lm-normal`` (module doc).
+        method: ``lm`` | ``trf`` | ``trf-lsmr`` | ``lm-normal`` (module doc; ``lm-normal``
+            by default, decision 0054).
         max_evaluations: residual evaluations at most (scipy's ``max_nfev``; for ``lm-normal``
             the number of J^T J builds, i.e. iterations).
         time_budget: time [s] on ``budget_clock`` after which ``trf``/``trf-lsmr``/
@@ -57,7 +59,9 @@ class LmTrainerConfig(ConfigBase):
             samples).
         batch: samples per Jacobian batch of ``lm-normal``.
         validation_fraction: share of the samples ``lm-normal`` holds out for early stopping
-            (0: none; the returned weights are the best on it).
+            (0: none; the returned weights are the best on it); each sample is held out with
+            this probability by a seeded draw of its own, so appending samples keeps the split
+            of the earlier ones.
         patience: accepted ``lm-normal`` steps without a better validation error before it
             stops.
         curvature_samples: samples J^T J is built from per ``lm-normal`` iteration (0: all).
@@ -68,7 +72,7 @@ class LmTrainerConfig(ConfigBase):
             one BLAS thread it equals the wall time of an idle machine).
     """
 
-    method: str = "trf-lsmr"
+    method: str = "lm-normal"
     max_evaluations: int = 400
     time_budget: float = 0.0
     ftol: float = 1e-10
@@ -149,6 +153,19 @@ def check_dataset(x: np.ndarray, y: np.ndarray, n_in: int, n_out: int
         raise InvalidInput(f"dataset: {len(rows)} sample(s) with NaN or infinite values "
                            f"(first at row {rows[0]}); drop them before training")
     return x, y
+
+
+def validation_split(n: int, fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(validation, fit) indices of ``n`` samples: sample i is held out when draw i of a
+    stream seeded with ``seed`` is below ``fraction``. The split of the first n samples does not
+    change when samples are appended, so training continued on a grown dataset (online
+    adaptation) never validates on samples it fitted before, as a permutation of the grown set
+    would (decision 0054). No fit sample left: no validation."""
+    pick = np.random.default_rng(seed).random(int(n)) < fraction
+    val, fit = np.flatnonzero(pick), np.flatnonzero(~pick)
+    if len(fit) == 0:
+        return val[:0], np.arange(int(n))
+    return val, fit
 
 
 def _scale(v: np.ndarray) -> np.ndarray:
@@ -250,11 +267,8 @@ class LmTrainer:
     def _solve_normal(self, net: TanhMlp, xn: np.ndarray, yn: np.ndarray, y: np.ndarray
                       ) -> tuple[TanhMlp, TrainingReport]:
         c = self.config
-        n_val = int(round(c.validation_fraction * len(xn)))
-        if n_val >= len(xn):
-            n_val = 0
-        order = np.random.default_rng(c.seed + 1).permutation(len(xn))
-        val, fit = order[:n_val], order[n_val:]
+        val, fit = validation_split(len(xn), c.validation_fraction, c.seed + 1)
+        n_val = len(val)
         solver = NormalEquationsLm(
             batch=c.batch, max_iterations=c.max_evaluations, time_budget=c.time_budget,
             initial_damping=c.initial_damping, patience=c.patience,

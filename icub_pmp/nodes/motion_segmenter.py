@@ -18,9 +18,13 @@ publishes   /motion/left/mask, /motion/right/mask (sensor_msgs/Image mono8, 255 
             /motion/target/estimate (icub_interfaces/VisualTarget): the same with its
             covariance, top face, size, velocity and state.
 
-Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig` and of
-:class:`~icub_pmp.vision.StereoTargetConfig` (``config/motion_segmenter.yaml``); a change
-resets the segmenters and the target.
+Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig`, of
+:class:`~icub_pmp.vision.StereoTargetConfig` and of
+:class:`~icub_pmp.body_schema.eye_hand_target.EyeHandTargetConfig`
+(``config/motion_segmenter.yaml``); a change resets the segmenters and the target.
+``target_source: eye_hand_map`` makes the object's pixel pairs points through the eye-hand map
+learned from babbling (force paper eq 12) instead of ray triangulation; a map that cannot be
+used (no file, another camera setup) is a warning and the node stays on triangulation.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
 from icub_interfaces.msg import MotionBlob as MotionBlobMsg
 from icub_interfaces.msg import MotionBlobs as MotionBlobsMsg
 from icub_interfaces.msg import VisualTarget
+from icub_pmp.body_schema.eye_hand_target import EyeHandPoints, EyeHandTargetConfig
 from icub_pmp.config import repo_root
 from icub_pmp.errors import IcubPmpError
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
@@ -91,11 +96,12 @@ class MotionSegmenterNode(Node):
 
     def __init__(self) -> None:
         super().__init__("motion_segmenter")
-        self.params = ConfigParameters(self, (MotionSegmenterConfig, StereoTargetConfig),
-                                       on_change=self._on_config_change)
+        self.params = ConfigParameters(
+            self, (MotionSegmenterConfig, StereoTargetConfig, EyeHandTargetConfig),
+            on_change=self._on_config_change)
         self.cameras = HeadCameras()
         self.nominal = {s: CameraIntrinsics() for s in SIDES}
-        self._reset(self.config, self.stereo_config)
+        self._reset(self.config, self.stereo_config, self.params.get(EyeHandTargetConfig))
         sd = qos_profile_sensor_data
         self.pub_mask = {s: self.create_publisher(Image, f"/motion/{s}/mask", sd) for s in SIDES}
         self.pub_blobs = {
@@ -134,8 +140,9 @@ class MotionSegmenterNode(Node):
         """The stereo target's configuration."""
         return self.params.get(StereoTargetConfig)
 
-    def _reset(self, config: MotionSegmenterConfig, stereo: StereoTargetConfig) -> None:
-        """Fresh segmenters, target and default intrinsics for ``config`` and ``stereo``."""
+    def _reset(self, config: MotionSegmenterConfig, stereo: StereoTargetConfig,
+               eye_hand: EyeHandTargetConfig) -> None:
+        """Fresh segmenters, target, intrinsics and eye-hand map for these configurations."""
         self.segmenters = {s: MotionSegmenter(config) for s in SIDES}
         cam = CameraIntrinsics(width=config.image_width, height=config.image_height,
                                cx=config.image_width / 2.0, cy=config.image_height / 2.0)
@@ -144,6 +151,7 @@ class MotionSegmenterNode(Node):
         self.intrinsics = self._calibrated_intrinsics()
         self.target = StereoTarget(stereo, self.intrinsics["left"],
                                    self.intrinsics["right"])
+        self.eye_hand = self._load_eye_hand(eye_hand, cam)
         self._latest: dict[str, tuple[float, np.ndarray, MotionBlobs] | None] = {
             s: None for s in SIDES}
         self._paired_stamp: float | None = None
@@ -172,6 +180,21 @@ class MotionSegmenterNode(Node):
         left, right = self.calibration.intrinsics(self.nominal["left"], self.nominal["right"])
         return {"left": left, "right": right}
 
+    def _load_eye_hand(self, c: EyeHandTargetConfig, cam: CameraIntrinsics
+                       ) -> EyeHandPoints | None:
+        """The eye-hand map of ``target_source: eye_hand_map`` (None: triangulation; a map that
+        cannot be used is a warning, and triangulation stays)."""
+        if c.target_source != "eye_hand_map":
+            return None
+        try:
+            points = EyeHandPoints.from_file(c.eye_hand_map_file, cam)
+        except IcubPmpError as exc:
+            self.get_logger().warn(f"target_source eye_hand_map: {exc}; the 3-D target stays "
+                                   "on triangulation")
+            return None
+        self.get_logger().info(f"3-D target from the eye-hand map {c.eye_hand_map_file}")
+        return points
+
     def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
         if new != old:  # called before the new values are stored: build from ``new``
             self._reset(*new)
@@ -192,6 +215,13 @@ class MotionSegmenterNode(Node):
             self.intrinsics = self._calibrated_intrinsics()
             self.target.left, self.target.right = self.intrinsics["left"], \
                 self.intrinsics["right"]
+            if self.eye_hand is not None:
+                try:
+                    EyeHandPoints(self.eye_hand.map, cam)
+                except IcubPmpError as exc:
+                    self.eye_hand = None
+                    self.get_logger().warn(f"/cam/{side}/camera_info: {exc}; the 3-D target "
+                                           "goes back to triangulation")
 
     def _on_image(self, side: str, msg: Image) -> None:
         c = self.config
@@ -242,8 +272,14 @@ class MotionSegmenterNode(Node):
             if self.calibration is not None:
                 poses = self.calibration.poses(poses)
             segments = self._arm_segments(state.positions)
+            points_fn = None
+            if self.eye_hand is not None:
+                eyes = [state.positions[j] for j in ("eyes_tilt", "eyes_version",
+                                                     "eyes_vergence")]
+                points_fn = self.eye_hand.points_fn(self.cameras.head_pose(state.positions),
+                                                    eyes)
             res = self.target.process(left[0], left[1], right[1], left[2], right[2], poses,
-                                      segments)
+                                      segments, points_fn)
         except IcubPmpError as exc:
             self.get_logger().warn(f"no 3-D target: {exc}", throttle_duration_sec=5.0)
             return

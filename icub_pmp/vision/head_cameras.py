@@ -53,11 +53,16 @@ class HeadCameras:
         vals = np.array([float(joints.get(j, 0.0)) for j in HEAD_JOINTS])
         if not np.all(np.isfinite(vals)):
             raise InvalidInput(f"joints: non-finite head/eye position in {dict(joints)}")
-        q = self.model.q_from_dict({j: float(joints[j]) for j in HEAD_JOINTS[:6] if j in joints},
-                                   self._q0)
-        T_head = self.model.frame_pose(q, "head").homogeneous
+        T_head = self.head_pose(joints)
         tilt, version, vergence = (float(joints[j]) for j in _EYES)
         return CameraPoses(
             self.eyes.T_root_camera(T_head, "left", tilt, version, vergence),
             self.eyes.T_root_camera(T_head, "right", tilt, version, vergence),
         )
+
+    def head_pose(self, joints: Mapping[str, float]) -> np.ndarray:
+        """T_root_head (4, 4): the URDF ``head`` frame for the torso and neck joints of
+        ``joints`` (missing ones 0)."""
+        q = self.model.q_from_dict({j: float(joints[j]) for j in HEAD_JOINTS[:6] if j in joints},
+                                   self._q0)
+        return self.model.frame_pose(q, "head").homogeneous
