@@ -112,7 +112,8 @@ def test_handover_through_an_empty_area(space):
     np.testing.assert_allclose(take.pick, give.place)
     assert space.shared.contains(give.place[None] + [0, 0, 0.06])[0]
     others = [np.array(p) for p in list(s.objects.values()) + list(AREAS.values())]
-    assert min(np.linalg.norm(give.place - p) for p in others) >= 0.08
+    assert min(np.linalg.norm(give.place - p) for p in others) >= \
+        TabletopTaskConfig().place_clearance
     assert give.place[2] == pytest.approx(Z)
 
 

@@ -55,7 +55,9 @@ class TabletopTaskConfig:
         grasp_height: hand frame above the object's centre when reaching onto it (a little
             lower than where the palm stops on a 4 cm cube, so that it presses on it) [m].
         lift_height: hand frame above the object's centre when lifted [m].
-        place_height: hand frame above the place point when releasing [m].
+        place_height: hand frame above the place point when releasing [m] (as imagined; the
+            executor aims the object's centre ``drop_height`` above it).
+        drop_height: the object's centre above its resting height at the release [m].
         retreat_height: hand frame above the place point after the release [m].
         empty_area_band: (low, high) heights [m] above the objects' centre where the
             shared-workspace neurons count as candidate release points of a hand-over.
@@ -63,15 +65,19 @@ class TabletopTaskConfig:
             area [m].
         place_x_range: (low, high) x [m] of an empty area: over the table (its front edge
             is at x = -0.22 in ``config/sim_bridge.yaml``).
+        slot_spacing: the objects brought to one target area are put down this far apart
+            along y, the first at the area's centre, the next ones towards the middle [m].
     """
 
     grasp_height: float = 0.035
     lift_height: float = 0.10
     place_height: float = 0.06
+    drop_height: float = 0.01
     retreat_height: float = 0.12
     empty_area_band: tuple[float, float] = (0.03, 0.09)
-    place_clearance: float = 0.08
+    place_clearance: float = 0.06
     place_x_range: tuple[float, float] = (-0.40, -0.24)
+    slot_spacing: float = 0.08
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -85,6 +91,9 @@ class TabletopTaskConfig:
             if not lo < hi:
                 raise InvalidInput(f"TabletopTaskConfig.{name}: expected (low, high) with low < "
                                    f"high, got {getattr(self, name)}")
+        if self.slot_spacing <= 0:
+            raise InvalidInput(f"TabletopTaskConfig.slot_spacing: expected > 0 m, got "
+                               f"{self.slot_spacing}")
         if self.place_clearance <= 0:
             raise InvalidInput(f"TabletopTaskConfig.place_clearance: expected > 0 m, got "
                                f"{self.place_clearance}")
@@ -134,8 +143,8 @@ class Job(NamedTuple):
         object: the object's name.
         kind: one of :data:`JOB_KINDS`.
         pick: (3,) object centre where it is picked [m].
-        place: (3,) object centre where it is put down [m] (the target area, or the empty
-            area of a hand-over).
+        place: (3,) object centre where it is put down [m] (its slot in the target area, or
+            the empty area of a hand-over).
         area: the target area's name ('' for a hand-over's empty area).
     """
 
@@ -223,10 +232,11 @@ class TabletopPlanner:
         up = np.array([0.0, 0.0, 1.0])
         alloc = self.space.allocate(pts + c.grasp_height * up)
         undeliverable: dict[str, str] = {}
+        slot = self._slots(scene, names)
         entries: dict[str, list[tuple[int, str]]] = {a: [] for a in HANDS}
         for arm in HANDS:
             for i in alloc.assignments[arm]:
-                dest = np.asarray(scene.areas[scene.destinations[names[i]]])
+                dest = slot[names[i]]
                 if self.reaches(arm, dest + c.place_height * up):
                     entries[arm].append((i, "deliver"))
                 elif self.reaches(_other(arm), dest + c.place_height * up):
@@ -242,14 +252,14 @@ class TabletopPlanner:
             for r, (i, kind) in enumerate(entries[arm]):
                 name = names[i]
                 area = scene.destinations[name]
-                dest = np.asarray(scene.areas[area])
+                dest = slot[name]
                 if kind == "deliver":
                     queues[arm].append(Job(arm, name, "deliver", pts[i].copy(), dest, area))
                     continue
                 # still on the table when this object is put down: objects not picked in an
                 # earlier round, the target areas and the other hand-overs' spots
                 occupied = [pts[k] for k in range(len(names)) if picked_in.get(k, r) >= r]
-                occupied += [np.asarray(p) for p in scene.areas.values()] + spots
+                occupied += list(slot.values()) + spots
                 spot = self._empty_area(arm, occupied, float(pts[:, 2].mean()))
                 if spot is None:
                     undeliverable[name] = "no empty area in the shared workspace for a hand-over"
@@ -283,6 +293,19 @@ class TabletopPlanner:
                         if j is not None and j.kind == "handover")
         return TaskPlan(tuple(rounds), tuple(names[i] for i in alloc.unreachable),
                         undeliverable, handovers, (checks, hits))
+
+    def _slots(self, scene: TabletopScene, names: list[str]) -> dict[str, np.ndarray]:
+        """Each object's place point (3,) [m] in its target area: the k-th object of an area
+        ``k * slot_spacing`` from its centre along y, towards y = 0."""
+        count: dict[str, int] = {}
+        out = {}
+        for name in names:
+            area = scene.destinations[name]
+            c = np.asarray(scene.areas[area], dtype=float)
+            k = count.get(area, 0)
+            count[area] = k + 1
+            out[name] = c - np.array([0.0, np.sign(c[1]) * k * self.config.slot_spacing, 0.0])
+        return out
 
     def _empty_area(self, arm: str, occupied: list[np.ndarray], z: float
                     ) -> np.ndarray | None:

@@ -12,8 +12,8 @@ phase together, ``serial`` the first arm's job while the other waits at the safe
 then the other's, ``single`` one arm. ``all_serial=True`` runs every round serially: the same
 task without scheduling, the baseline of the speed-up.
 
-Judged in the physics: an object is delivered when it rests within ``area_radius`` of its
-target area (horizontal distance) at the end; arm-arm contacts (:meth:`Simulator.self_contacts`)
+Judged in the physics: an object is delivered when it rests on the table within
+``area_radius`` (horizontal distance) of its place in its target area at the end; arm-arm contacts (:meth:`Simulator.self_contacts`)
 and arm-object collisions (:meth:`Simulator.object_contacts` with an object other than the
 one the arm is working on) are counted as events (a pair of bodies touching in consecutive
 samples counts once). Time is simulated time.
@@ -38,6 +38,7 @@ __all__ = ["TabletopExecution", "TaskReport", "SETTLE", "AREA_RADIUS"]
 SETTLE = 0.3
 #: an object within this horizontal distance of its target area's centre is delivered [m]
 AREA_RADIUS = 0.05
+_PHASES = ("onto the object", "lift", "above the place", "retreat")
 #: contacts are sampled every this many steps
 _SAMPLE_EVERY = 5
 
@@ -142,6 +143,11 @@ class TabletopExecution:
                 q[i] = js.position[self._sim_names.index(n)]
         return q
 
+    def _hand(self, arm: str) -> np.ndarray:
+        """``arm``'s hand frame (3,) [m] from the measured joints (forward kinematics)."""
+        frame = self.loop.sim.spec.hand_frames[arm]
+        return np.asarray(self.check.provider.positions(self._q(), [frame]))[0]
+
     def _park(self, arm: str) -> _Motion:
         t, names, pos = self.check.park_motion(arm, self._q())
         vel = np.gradient(pos, t, axis=0)
@@ -152,7 +158,7 @@ class TabletopExecution:
         """Execute ``motions`` (arm -> plan) together, then settle; contacts sampled."""
         if not motions:
             return
-        duration, _ = send_plans(self.loop, motions)
+        duration, self._scale = send_plans(self.loop, motions)
         n = int(round((duration + SETTLE) / self.loop.sim.config.timestep))
         for k in range(n):
             self.loop.step()
@@ -182,7 +188,7 @@ class TabletopExecution:
         """Run the arms' jobs phase by phase together; returns grasp refusals."""
         sim = self.loop.sim
         refusals = []
-        way = {a: j.waypoints(self.config) for a, j in jobs.items()}
+        way = {a: list(j.waypoints(self.config)) for a, j in jobs.items()}
         held: set[str] = set()
         for phase in range(4):
             q = self._q()
@@ -191,6 +197,14 @@ class TabletopExecution:
             for a in jobs:
                 busy[a] = jobs[a].object
             self._run(plans, busy)
+            self.trace.append({
+                "t": round(self.loop.t, 3), "phase": _PHASES[phase],
+                "time_scale": round(self._scale, 2), "arm_arm": self._arm_arm,
+                "targets": {a: np.round(way[a][phase], 3).tolist() for a in plans},
+                "hands": {a: np.round(sim.frame_pose(sim.built.hand_frames[a]).position,
+                                      3).tolist() for a in plans},
+                "objects": {n: np.round(sim.object_pose(n).position, 3).tolist()
+                            for n in sim.graspable}})
             if phase == 0:
                 for a, j in jobs.items():
                     try:
@@ -198,6 +212,16 @@ class TabletopExecution:
                         held.add(a)
                     except InvalidInput as exc:
                         refusals.append(str(exc))
+                        continue
+                    # the cube sits where the palm stopped on it: carry it so that its centre
+                    # (not the hand) arrives above the place point. The hand from the
+                    # measured joints through the planner's kinematics; the cube where the
+                    # scene said it was
+                    offset = self._hand(a) - j.pick
+                    drop = np.array([0.0, 0.0, self.config.drop_height])
+                    way[a][2] = j.place + offset + drop
+                    way[a][3] = way[a][2] + np.array(
+                        [0.0, 0.0, self.config.retreat_height - self.config.place_height])
             elif phase == 2:
                 for a in held:
                     sim.release(a)
@@ -214,6 +238,8 @@ class TabletopExecution:
         wall0 = time.perf_counter()
         self.reset(scene)
         self._arm_arm, self._arm_object, self._touching = 0, [], set()
+        #: after each phase: time, targets, measured hands and the cubes' true positions
+        self.trace: list[dict] = []
         t0 = self.loop.t
         refusals: list[str] = []
         busy: dict[str, str] = {}
@@ -233,13 +259,14 @@ class TabletopExecution:
                     self._run({a: self._park(a) for a in HANDS if a != arm}, busy)
                 refusals += self._phases({arm: jobs[arm]}, busy)
         sim = self.loop.sim
+        places = {j.object: j.place for j in plan.jobs() if j.kind == "deliver"}
         delivered = []
         for name, area in scene.destinations.items():
             if name in plan.unreachable or name in plan.undeliverable:
                 continue
             p = sim.object_pose(name).position
-            c = np.asarray(scene.areas[area])
-            if np.hypot(*(p[:2] - c[:2])) <= self.area_radius and abs(p[2] - c[2]) < 0.02:
+            c = places.get(name, np.asarray(scene.areas[area]))
+            if np.hypot(*(p[:2] - c[:2])) <= self.area_radius and abs(p[2] - c[2]) < 0.01:
                 delivered.append(name)
         handovers = sum(1 for j in plan.jobs() if j.kind == "handover"
                         and j.object in delivered)
