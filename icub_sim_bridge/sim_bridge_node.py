@@ -69,9 +69,9 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 from std_srvs.srv import SetBool
 
-from icub_interfaces.msg import SelfContact as SelfContactMsg
 from icub_interfaces.msg import ObjectContact as ObjectContactMsg
 from icub_interfaces.msg import ObjectContacts, SelfContacts, SimStatus
+from icub_interfaces.msg import SelfContact as SelfContactMsg
 from icub_interfaces.srv import ApplyWrench, Grasp, ResetSim, SetObjectPose
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.ros.conversions import (

@@ -13,9 +13,10 @@ then the other's, ``single`` one arm. ``all_serial=True`` runs every round seria
 task without scheduling, the baseline of the speed-up.
 
 Judged in the physics: an object is delivered when it rests on the table within
-``area_radius`` (horizontal distance) of its place in its target area at the end; arm-arm contacts (:meth:`Simulator.self_contacts`)
-and arm-object collisions (:meth:`Simulator.object_contacts` with an object other than the
-one the arm is working on) are counted as events (a pair of bodies touching in consecutive
+``area_radius`` (horizontal distance) of its place in its target area at the end; arm-arm
+contacts (:meth:`Simulator.self_contacts`) and arm-object collisions
+(:meth:`Simulator.object_contacts` with an object other than the one the arm is working on)
+are counted as events (a pair of bodies touching in consecutive
 samples counts once). Time is simulated time.
 """
 
