@@ -9,8 +9,10 @@ it with :meth:`Simulator.grasp` (the emulated grasp: a weld switched on only whe
 touches the object in the simulator's contacts, refused otherwise), after the reach above the
 place point it releases it. Rounds run as planned: ``parallel`` both arms' jobs phase by
 phase together, ``serial`` the first arm's job while the other waits at the safe posture,
-then the other's, ``single`` one arm. ``all_serial=True`` runs every round serially: the same
-task without scheduling, the baseline of the speed-up.
+then the other's, ``single`` one arm, the idle one at the safe posture first (it may hover
+where the other arm goes: over a hand-over's empty area, say). ``all_serial=True`` runs every
+round serially: the same task without scheduling, the baseline of the speed-up (each job
+waits for the previous one, the other arm at the safe posture meanwhile).
 
 Judged in the physics: an object is delivered when it rests on the table within
 ``area_radius`` (horizontal distance) of its place in its target area at the end; arm-arm
@@ -256,8 +258,8 @@ class TabletopExecution:
             for arm in order:
                 if arm not in jobs:
                     continue
-                if mode == "serial":  # the waiting arm out of the shared workspace
-                    self._run({a: self._park(a) for a in HANDS if a != arm}, busy)
+                # the waiting (serial) or idle (single) arm out of the shared workspace first
+                self._run({a: self._park(a) for a in HANDS if a != arm}, busy)
                 refusals += self._phases({arm: jobs[arm]}, busy)
         sim = self.loop.sim
         places = {j.object: j.place for j in plan.jobs() if j.kind == "deliver"}
