@@ -5,6 +5,7 @@ error while the node keeps running."""
 
 from __future__ import annotations
 
+import pytest
 from geometry_msgs.msg import Pose
 
 from icub_interfaces.msg import ObjectContacts
@@ -13,6 +14,8 @@ from icub_pmp.config import config_dir
 from icub_pmp.testing import NodeProcess, ros_environment
 from icub_sim_bridge.sim_config import SimConfig
 from icub_sim_bridge.simulator import Simulator
+
+pytestmark = pytest.mark.integration
 
 CUBES = "cube_a:-0.30,-0.15,-0.07"
 
