@@ -11,7 +11,7 @@ TF2_MSGS = $$(test -e $(VENV)/share/ament_index/resource_index/packages/tf2_msgs
 PKG := setup.py setup.cfg package.xml $(wildcard config/*.yaml)
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: env test test-fast lint demo demo-learned bench paper clean lock
+.PHONY: env test test-fast lint demo demo-learned demo-tabletop bench paper clean lock
 
 env: $(VENV)/.deps-stamp install/.build-stamp
 
@@ -49,6 +49,10 @@ demo: env
 # PMP on the learned body vs the URDF in the simulator (LEARNED_ARGS="--model FILE" etc.)
 demo-learned: env
 	scripts/env.sh python -m icub_pmp.demo.learned_reach $(LEARNED_ARGS)
+
+# the tabletop task of issue 19 (two arms, hand-over, emulated grasp): bags/tabletop-<time>/
+demo-tabletop: env
+	OPENBLAS_NUM_THREADS=1 scripts/env.sh python -m icub_pmp.demo.tabletop $(TABLETOP_ARGS)
 
 # every benchmark's --quick run, one after the other, then BENCHMARKS.md rewritten
 bench: env

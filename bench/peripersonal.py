@@ -27,6 +27,14 @@ target by more than 1 cm are skipped (counted). The check's ``margin`` was chose
 ``--tune`` on seed 1; the benchmark's pairs use seed 2 (held out). ``margin_for_recall_1``
 reports the smallest margin that would have caught every physics collision of this run.
 
+The tabletop task (issue 19, :mod:`icub_pmp.demo.tabletop`): the demo's four cubes planned
+with these maps (allocation by reward, hand-overs through an empty area, pairs parallel or
+serial by the imagined check) and executed twice in the same harness, as scheduled and
+all-serial: ``task_success`` (every cube delivered, 0 arm-arm contacts, 0 arm-object
+collisions other than the grasped cube, in the physics), ``task_speedup_vs_serial`` (the
+all-serial run's simulated time over the scheduled run's), ``task_arm_arm_contacts``,
+``task_arm_object_collisions``, ``task_handovers``. ``--no-task`` skips it.
+
 Ends with one JSON line. Timings depend on the machine's load (the load average is printed).
 """
 
@@ -46,6 +54,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from icub_pmp.demo.tabletop import run_tabletop  # noqa: E402
 from icub_pmp.errors import ModelError  # noqa: E402
 from icub_pmp.kinematics.robot_spec import HANDS  # noqa: E402
 from icub_pmp.peripersonal import (  # noqa: E402
@@ -101,6 +110,33 @@ def load_or_train(directory: Path, n_babbles: int, retrain: bool) -> tuple[dict,
     return maps, info
 
 
+def tabletop_figures(space: PeripersonalSpace) -> dict:
+    """The tabletop task's figures (module doc), from one scheduled and one all-serial run."""
+    t0 = time.perf_counter()
+    rep = run_tabletop(space)
+    s, b = rep["scheduled"], rep["serial"]
+    (OUT / "tabletop_report.json").write_text(json.dumps(rep, indent=1))
+    print(f"tabletop: plan {[r['mode'] for r in rep['plan']]}; delivered {s['delivered']} of "
+          f"{s['objects']}; {s['duration']:.2f} s scheduled vs {b['duration']:.2f} s all-serial "
+          f"(simulated); arm-arm contacts {s['arm_arm_contacts']} / {b['arm_arm_contacts']}, "
+          f"arm-object {s['arm_object_collisions']} / {b['arm_object_collisions']}; hand-overs "
+          f"{s['handovers']}; grasp refusals {s['grasp_refusals']}", file=sys.stderr)
+    return {
+        "task_success": bool(rep["task_success"]),
+        "task_speedup_vs_serial": round(rep["task_speedup_vs_serial"], 3),
+        "task_delivered": len(s["delivered"]),
+        "task_objects": s["objects"],
+        "task_time_s": round(s["duration"], 2),
+        "task_serial_time_s": round(b["duration"], 2),
+        "task_arm_arm_contacts": s["arm_arm_contacts"],
+        "task_arm_object_collisions": len(s["arm_object_collisions"]),
+        "task_serial_success": bool(b["success"]),
+        "task_handovers": s["handovers"],
+        "task_rounds": [r["mode"] for r in rep["plan"]],
+        "task_wall_s": round(time.perf_counter() - t0, 1),
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="30 reach pairs (< 2 min)")
@@ -110,6 +146,7 @@ def main() -> None:
     ap.add_argument("--babbles", type=int, default=40_000, help="babbled postures per arm")
     ap.add_argument("--maps", type=Path, default=OUT / "peripersonal_maps")
     ap.add_argument("--retrain", action="store_true", help="train the maps even if saved")
+    ap.add_argument("--no-task", action="store_true", help="skip the tabletop task")
     ap.add_argument("--estimator", action="store_true",
                     help="close the controller's torque loop on the wrench estimator too")
     args = ap.parse_args()
@@ -207,6 +244,10 @@ def main() -> None:
         "wall_s": round(time.perf_counter() - wall0, 1),
         "load_avg": [round(load0, 2), round(os.getloadavg()[0], 2)],
     }
+    if not args.no_task:
+        result.update(tabletop_figures(space))
+        result["wall_s"] = round(time.perf_counter() - wall0, 1)
+        result["load_avg"][1] = round(os.getloadavg()[0], 2)
     print(f"paper: 478 / 476 neurons (TX / RX) from about {PAPER_BABBLES} babbles; ours "
           f"{result['gng_neurons_left']} / {result['gng_neurons_right']} from "
           f"{args.babbles}", file=sys.stderr)

@@ -31,7 +31,9 @@ What the model is
   cylinder; every link of the left arm against every link of the right arm (the two arms can
   hit each other; the links of one arm never collide with each other); hands, wrists and
   forearms against the chest (the convex hulls of the upper arms and of root_link overlap at
-  ordinary postures, so those pairs are left out); objects against table and floor. Collision
+  ordinary postures, so those pairs are left out); objects against table and floor (also the
+  tabletop cubes of ``SimConfig.tabletop_objects``, each with an inactive weld per hand that
+  the simulator's grasp switches on). Collision
   shapes are convex hulls of the simplified meshes (MuJoCo's mesh collision).
 - Sensors: force + torque at the four FT sensor joints (``<ft>_site`` on the child body, at
   the URDF sensor origin), head IMU (``head_imu_0``: gyro, accelerometer, orientation).
@@ -65,7 +67,7 @@ from icub_pmp.kinematics.urdf_robot import UrdfRobot
 from icub_sim_bridge.sim_config import SimConfig
 
 __all__ = ["ModelBuilder", "BuiltModel", "GROUP_VISUAL", "GROUP_LEGS", "GROUP_COLLISION",
-           "OBJECT_NAMES", "EYE_CAMERAS", "HAND_MARKER_RGBA"]
+           "OBJECT_NAMES", "EYE_CAMERAS", "HAND_MARKER_RGBA", "tabletop_names"]
 
 #: geom groups: eye cameras draw groups 0 (robot upper body, scene) and 1 (objects) only.
 GROUP_VISUAL = 0
@@ -478,6 +480,41 @@ class ModelBuilder:
             b.ipos = [0.0, 0.0, 0.0]
             b.iquat = [1.0, 0.0, 0.0, 0.0]
             b.explicitinertial = True
+        self._add_tabletop(s)
+
+    def _add_tabletop(self, s: mujoco.MjSpec) -> None:
+        """The tabletop cubes (``SimConfig.tabletop_objects``) and, per hand and cube, a weld
+        ``grasp_<hand>_<cube>`` created inactive: the simulator switches it on at run time to
+        emulate a grasp (the model has no fingers) and sets its relative pose then."""
+        cfg = self.config
+        e = cfg.tabletop_cube_size
+        m = cfg.tabletop_cube_mass
+        colours = ((0.95, 0.8, 0.1), (0.1, 0.75, 0.75), (0.8, 0.3, 0.8), (0.95, 0.5, 0.1),
+                   (0.4, 0.4, 0.95), (0.6, 0.9, 0.3))
+        for k, (name, pos) in enumerate(cfg.tabletop().items()):
+            b = s.worldbody.add_body(name=name, pos=list(pos))
+            b.add_freejoint(name=f"{name}_freejoint")
+            g = b.add_geom(name=f"{name}_geom", type=mujoco.mjtGeom.mjGEOM_BOX,
+                           size=[e / 2] * 3, rgba=[*colours[k % len(colours)], 1.0])
+            g.contype = g.conaffinity = _BIT_WORLD | _BIT_ARM
+            g.friction = [cfg.object_friction, 0.005, 0.0001]
+            g.condim = 4
+            g.group = GROUP_OBJECTS
+            b.mass = m
+            b.inertia = [m * e * e / 6] * 3
+            b.ipos = [0.0, 0.0, 0.0]
+            b.iquat = [1.0, 0.0, 0.0, 0.0]
+            b.explicitinertial = True
+            for hand in ("l_hand", "r_hand"):
+                eq = s.add_equality(name=f"grasp_{hand[0]}_{name}",
+                                    type=mujoco.mjtEq.mjEQ_WELD, name1=hand, name2=name,
+                                    objtype=mujoco.mjtObj.mjOBJ_BODY)
+                eq.active = False
+
+
+def tabletop_names(config: SimConfig) -> tuple[str, ...]:
+    """The tabletop cubes of ``config`` (movable objects besides :data:`OBJECT_NAMES`)."""
+    return tuple(config.tabletop())
 
 
 def main() -> None:

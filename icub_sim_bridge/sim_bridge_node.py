@@ -14,13 +14,17 @@ publishes  /clock (every ``clock_decimation`` steps: 100 Hz of simulated time by
            (root_link, about the hand frame), /ground_truth/objects/{box,cylinder} (PoseStamped),
            /ground_truth/self_contacts (icub_interfaces/SelfContacts: the arms touching each
            other or the torso, root_link; an empty list when nothing touches)
+           /ground_truth/object_contacts (icub_interfaces/ObjectContacts: robot links touching
+           movable objects, and whether the object is the hand's grasped one)
 subscribes /effort_command (JointState name + effort [N m]; any subset of joints; rejected
            whole with a throttled warning on unknown names, NaN/inf, length mismatch)
            /sim/status (icub_interfaces/SimStatus, reliable + transient local: running,
            holding or paused and why, divergences; on change and every wall second)
 services   /sim/reset (ResetSim), /sim/set_object_pose (SetObjectPose), /sim/set_paused
            (std_srvs/SetBool), /sim/apply_wrench (ApplyWrench: bounded force, torque and
-           duration; a request beyond the bounds is answered success=false with the reason)
+           duration; a request beyond the bounds is answered success=false with the reason),
+           /sim/grasp (Grasp: the emulated grasp of a tabletop cube, a weld switched on only
+           when the palm touches it, else success=false with the reason; or its release)
 
 Modes (parameter ``mode``): ``free_run`` paced at ``real_time_factor`` (0 = as fast as
 possible) or ``lockstep``: after publishing the state stamped t, the next step waits (up to
@@ -65,9 +69,10 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 from std_srvs.srv import SetBool
 
+from icub_interfaces.msg import ObjectContact as ObjectContactMsg
+from icub_interfaces.msg import ObjectContacts, SelfContacts, SimStatus
 from icub_interfaces.msg import SelfContact as SelfContactMsg
-from icub_interfaces.msg import SelfContacts, SimStatus
-from icub_interfaces.srv import ApplyWrench, ResetSim, SetObjectPose
+from icub_interfaces.srv import ApplyWrench, Grasp, ResetSim, SetObjectPose
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.ros.conversions import (
     pose_to_arrays,
@@ -155,6 +160,8 @@ class SimBridge(Node):
         self.pub_obj = {o: self.create_publisher(PoseStamped, f"/ground_truth/objects/{o}", sd)
                         for o in self.sim.object_names}
         self.pub_self = self.create_publisher(SelfContacts, "/ground_truth/self_contacts", sd)
+        self.pub_objc = self.create_publisher(ObjectContacts, "/ground_truth/object_contacts",
+                                              sd)
         # --- reusable messages (filled in place every step)
         self._clock_msg = Clock()
         self._js_writer = RawJointStateWriter(list(self._names))
@@ -172,6 +179,8 @@ class SimBridge(Node):
             self._gt_msgs[h] = m
         self._self_msg = SelfContacts()
         self._self_msg.header.frame_id = "root_link"
+        self._objc_msg = ObjectContacts()
+        self._objc_msg.header.frame_id = "root_link"
         self._obj_msgs = {}
         for o in self.sim.object_names:
             m = PoseStamped()
@@ -208,6 +217,7 @@ class SimBridge(Node):
         self.create_service(SetObjectPose, "/sim/set_object_pose", self._srv_set_object_pose)
         self.create_service(SetBool, "/sim/set_paused", self._srv_set_paused)
         self.create_service(ApplyWrench, "/sim/apply_wrench", self._srv_apply_wrench)
+        self.create_service(Grasp, "/sim/grasp", self._srv_grasp)
         self.get_logger().info(
             f"sim_bridge: {len(self._names)} actuated joints, mode {self.config.mode}, "
             f"real_time_factor {self.config.real_time_factor}, cameras "
@@ -395,6 +405,21 @@ class SimBridge(Node):
         resp.success, resp.message = self._run_in_loop(do)
         return resp
 
+    def _srv_grasp(self, req: Grasp.Request, resp: Grasp.Response) -> Grasp.Response:
+        def do() -> str:
+            if req.attach:
+                self.sim.grasp(req.object, req.hand)
+                return f"{req.object} attached to the {req.hand} palm (emulated grasp)"
+            held = self.sim.grasped.get(req.hand)
+            if held is not None and req.object and held != req.object:
+                raise InvalidInput(f"release {req.object!r}: the {req.hand} hand holds {held!r}")
+            released = self.sim.release(req.hand)
+            return (f"{released} released by the {req.hand} hand" if released else
+                    f"the {req.hand} hand held nothing")
+
+        resp.success, resp.message = self._run_in_loop(do)
+        return resp
+
     # ------------------------------------------------------------------ publishing
     def _active(self, pub: Any) -> bool:
         """Whether ``pub`` has subscribers (refreshed every 100 steps): streams nobody reads
@@ -456,6 +481,8 @@ class SimBridge(Node):
                 pub.publish(m)
             if self._active(self.pub_self):
                 self._publish_self_contacts(ns)
+            if self._active(self.pub_objc):
+                self._publish_object_contacts(ns)
         if self.cameras is not None and ns >= self._next_cam_ns and (
                 self._active(self.pub_img["left"]) or self._active(self.pub_img["right"])
                 or self._active(self.pub_info["left"]) or self._active(self.pub_info["right"])):
@@ -475,6 +502,19 @@ class SimBridge(Node):
             contacts.append(cm)
         m.contacts = contacts
         self.pub_self.publish(m)
+
+    def _publish_object_contacts(self, ns: int) -> None:
+        m = self._objc_msg
+        _set_stamp(m.header.stamp, ns)
+        contacts = []
+        for c in self.sim.object_contacts():
+            cm = ObjectContactMsg()
+            cm.object, cm.body, cm.arm, cm.grasped = c.object, c.body, c.arm, c.grasped
+            _set_vec(cm.position, c.position)
+            cm.normal_force = c.normal_force
+            contacts.append(cm)
+        m.contacts = contacts
+        self.pub_objc.publish(m)
 
     # ------------------------------------------------------------------ status
     def _check_divergence(self) -> None:

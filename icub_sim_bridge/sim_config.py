@@ -64,6 +64,12 @@ class SimConfig(ConfigBase):
     cylinder_height: float = 0.12  # [m]
     cylinder_mass: float = 0.1  # [kg]
     object_friction: float = 1.0  # sliding friction of hands, objects and table
+    # tabletop task (issue 19): small cubes, none by default (the demo's scene unchanged)
+    #: cubes as "name:x,y,z name:x,y,z" (centres [m]); "" = none. One string: a ROS list
+    #: parameter cannot be empty
+    tabletop_objects: str = ""
+    tabletop_cube_size: float = 0.04  # edge of every cube [m]
+    tabletop_cube_mass: float = 0.05  # [kg]
     # --- safety: bounds on scripted requests, divergence guard, missing commands ------------
     max_wrench_force: float = 100.0  # [N] largest |force| of a scripted wrench
     max_wrench_torque: float = 10.0  # [N m] largest |torque| of a scripted wrench
@@ -112,3 +118,32 @@ class SimConfig(ConfigBase):
                               f"{list(self.hand_marker_offset)}")
         if min(self.table_size) <= 0 or min(self.box_size) <= 0:
             raise ConfigError("SimConfig.table_size/box_size: extents must be > 0")
+        self._validate_tabletop()
+
+    def _validate_tabletop(self) -> None:
+        """The tabletop cubes: unique new names, 3 finite coordinates each, sizes > 0."""
+        self.tabletop()
+        for name in ("tabletop_cube_size", "tabletop_cube_mass"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0.0):
+                raise ConfigError(f"SimConfig.{name}: expected a finite value > 0, got {v}")
+
+    def tabletop(self) -> dict[str, tuple[float, float, float]]:
+        """{cube name: centre (x, y, z) [m]} parsed from ``tabletop_objects`` (raises
+        :class:`ConfigError` naming the bad entry)."""
+        out: dict[str, tuple[float, float, float]] = {}
+        reserved = ("box", "cylinder", "table")
+        for entry in self.tabletop_objects.split():
+            name, sep, xyz = entry.partition(":")
+            try:
+                p = tuple(float(v) for v in xyz.split(","))
+            except ValueError:
+                p = ()
+            if (not sep or not name or name in reserved or name in out or len(p) != 3
+                    or not all(math.isfinite(v) for v in p)):
+                raise ConfigError(
+                    f"SimConfig.tabletop_objects: bad entry {entry!r}: expected "
+                    f"'name:x,y,z' with a unique name other than {list(reserved)} and 3 finite "
+                    f"coordinates [m]")
+            out[name] = (p[0], p[1], p[2])
+        return out

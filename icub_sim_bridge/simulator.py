@@ -31,7 +31,9 @@ step, torque applied during it):
 - :meth:`self_contacts` -- ground truth: the robot touching itself (left arm against right
   arm, an arm against the torso), one :class:`SelfContact` per MuJoCo contact point.
 
-Scene: :meth:`object_pose`, :meth:`set_object_pose` (``box``, ``cylinder``),
+Scene: :meth:`object_pose`, :meth:`set_object_pose` (``box``, ``cylinder``, the tabletop cubes),
+:meth:`object_contacts` (ground truth: robot links touching objects), :meth:`grasp` /
+:meth:`release` (the emulated grasp of a cube: a weld switched on only on palm contact),
 :meth:`apply_wrench` (a scripted external wrench on a body or at a frame for a duration).
 Both refuse what is not physically meaningful (``SimConfig``): a force above
 ``max_wrench_force``, a torque above ``max_wrench_torque``, a duration above
@@ -74,13 +76,20 @@ import numpy as np
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.name_index import name_indices
 from icub_pmp.kinematics.robot_spec import RobotSpec
-from icub_sim_bridge.model_builder import EYE_CAMERAS, OBJECT_NAMES, BuiltModel, ModelBuilder
+from icub_sim_bridge.model_builder import (
+    EYE_CAMERAS,
+    OBJECT_NAMES,
+    BuiltModel,
+    ModelBuilder,
+    tabletop_names,
+)
 from icub_sim_bridge.realism_config import RealismConfig
 from icub_sim_bridge.robot_imperfections import RobotImperfections
 from icub_sim_bridge.sim_config import SimConfig
 
 __all__ = ["Simulator", "JointState", "Wrench", "Pose", "ImuReading", "SelfContact",
-           "Divergence", "FT_SENSORS", "FT_SIGN_CONVENTION", "SELF_CONTACT_KINDS"]
+           "ObjectContact", "GraspRefused", "Divergence", "FT_SENSORS", "FT_SIGN_CONVENTION",
+           "SELF_CONTACT_KINDS"]
 
 FT_SENSORS = ("l_arm_ft", "r_arm_ft", "l_leg_ft", "r_leg_ft")
 FT_SIGN_CONVENTION = "child_to_parent"
@@ -150,6 +159,25 @@ class SelfContact(NamedTuple):
     force: np.ndarray
     normal_force: float
     depth: float
+
+
+class ObjectContact(NamedTuple):
+    """One contact point between a link of the robot and a movable object.
+
+    ``object`` is the object, ``body`` the robot's link, ``arm`` 'left' | 'right' | 'torso',
+    ``grasped`` whether the object is welded to that arm's hand (the emulated grasp),
+    ``position`` (3,) [m] the contact point in root_link, ``normal_force`` [N]."""
+
+    object: str
+    body: str
+    arm: str
+    grasped: bool
+    position: np.ndarray
+    normal_force: float
+
+
+class GraspRefused(InvalidInput):
+    """A grasp that the simulator refuses (no palm contact, object already held, ...)."""
 
 
 class Divergence(NamedTuple):
@@ -227,7 +255,7 @@ class Simulator:
         self._hand_site = {h: self._id(mujoco.mjtObj.mjOBJ_SITE, self.built.hand_frames[h])
                            for h in _HANDS}
         self._objects = {}
-        for name in OBJECT_NAMES:
+        for name in OBJECT_NAMES + tabletop_names(self.config):
             b = self._id(mujoco.mjtObj.mjOBJ_BODY, name)
             jnt = m.body_jntadr[b]
             self._objects[name] = (b, m.jnt_qposadr[jnt], m.jnt_dofadr[jnt])
@@ -246,6 +274,17 @@ class Simulator:
             self._geom_side[g] = 1 if name.startswith("l_") else 2 if name.startswith("r_") \
                 else 3
         self._f6 = np.zeros(6)
+        # objects by geom (-1: not an object), the grasp welds {(hand, object): eq id}
+        self._geom_object = np.full(m.ngeom, -1, dtype=int)
+        self._object_list = tuple(self._objects)
+        for k, (b, _, _) in enumerate(self._objects.values()):
+            self._geom_object[m.body_geomadr[b]:m.body_geomadr[b] + m.body_geomnum[b]] = k
+        self._welds = {}
+        for hand in _HANDS:
+            for name in tabletop_names(self.config):
+                self._welds[(hand, name)] = self._id(mujoco.mjtObj.mjOBJ_EQUALITY,
+                                                     f"grasp_{hand[0]}_{name}")
+        self._grasped: dict[str, str] = {}  # hand -> object
         # hold gains (an affine actuator PD, see _set_held) and the dofs for gravity terms
         self._kp = _HOLD_KP_PER_NM * self.torque_limits
         self._kd = _HOLD_KD_PER_NM * self.torque_limits
@@ -313,6 +352,7 @@ class Simulator:
         t = self.data.time
         mujoco.mj_resetData(self.model, self.data)
         self.data.time = t
+        self._grasped.clear()  # mj_resetData switched the welds back to eq_active0 (off)
         target = np.array([values.get(n, 0.0) for n in self.joint_names])
         target = np.clip(target, self.lower, self.upper)
         self._write_q(target)
@@ -518,6 +558,7 @@ class Simulator:
         t = float(d.time) if np.isfinite(d.time) else self._good_time
         mujoco.mj_resetData(m, d)  # clears velocities, accelerations, warnings, xfrc_applied
         d.time = t
+        self._grasped.clear()  # and the grasp welds go off
         np.copyto(d.qpos, self._good_qpos)
         mujoco.mj_forward(m, d)
         self._applied.clear()
@@ -615,6 +656,93 @@ class Simulator:
             out.append(SelfContact(kind, m.body(b1).name, m.body(b2).name, c.pos.copy(), on_1,
                                    float(self._f6[0]), float(max(-c.dist, 0.0))))
         return out
+
+    def object_contacts(self) -> list[ObjectContact]:
+        """Ground truth: the robot's links touching movable objects now (class doc of
+        :class:`ObjectContact`); empty when none do."""
+        d, m = self.data, self.model
+        if d.ncon == 0:
+            return []
+        g1, g2 = d.contact.geom1, d.contact.geom2
+        o1, o2 = self._geom_object[g1], self._geom_object[g2]
+        s1, s2 = self._geom_side[g1], self._geom_side[g2]
+        out = []
+        for i in np.flatnonzero(((o1 >= 0) & (s2 > 0)) | ((o2 >= 0) & (s1 > 0))):
+            obj, side, geom = ((o1[i], s2[i], g2[i]) if o1[i] >= 0 else (o2[i], s1[i], g1[i]))
+            mujoco.mj_contactForce(m, d, int(i), self._f6)
+            name = self._object_list[obj]
+            arm = ("left", "right", "torso")[side - 1]
+            out.append(ObjectContact(name, m.body(int(m.geom_bodyid[geom])).name, arm,
+                                     self._grasped.get(arm) == name, d.contact[i].pos.copy(),
+                                     float(self._f6[0])))
+        return out
+
+    @property
+    def grasped(self) -> dict[str, str]:
+        """{hand: object} welded now (the emulated grasps)."""
+        return dict(self._grasped)
+
+    @property
+    def graspable(self) -> tuple[str, ...]:
+        """The objects a hand can grasp: the tabletop cubes (``SimConfig.tabletop_objects``)."""
+        return tabletop_names(self.config)
+
+    def palm_touches(self, hand: str, name: str) -> bool:
+        """True when ``hand``'s body (the palm: the model has no fingers) touches object
+        ``name`` in the current contacts."""
+        body = self.built.hand_bodies[hand]
+        return any(c.object == name and c.body == body for c in self.object_contacts())
+
+    def grasp(self, name: str, hand: str) -> None:
+        """Attach cube ``name`` to ``hand``'s palm where it is now (a weld switched on, the
+        relative pose of this instant). Refused (:class:`GraspRefused`, nothing changes)
+        unless the palm touches the cube in the simulator's contacts, or when the hand
+        holds another object or the other hand holds this one."""
+        if hand not in _HANDS:
+            raise UnknownName("hand", hand, _HANDS)
+        if name not in self.graspable:
+            raise UnknownName("graspable object", name, self.graspable)
+        if self._grasped.get(hand) == name:
+            return
+        if hand in self._grasped:
+            raise GraspRefused(f"grasp {name!r}: the {hand} hand already holds "
+                               f"{self._grasped[hand]!r}; release it first")
+        for h, o in self._grasped.items():
+            if o == name:
+                raise GraspRefused(f"grasp {name!r}: the {h} hand holds it; release it first")
+        if not self.palm_touches(hand, name):
+            raise GraspRefused(
+                f"grasp {name!r} with the {hand} hand refused: the palm "
+                f"({self.built.hand_bodies[hand]}) does not touch it (object at "
+                f"{np.round(self.object_pose(name).position, 3).tolist()} m, hand at "
+                f"{np.round(self.frame_pose(self.built.hand_frames[hand]).position, 3).tolist()}"
+                f" m)")
+        m, d = self.model, self.data
+        eq = self._welds[(hand, name)]
+        b1, b2 = int(m.eq_obj1id[eq]), int(m.eq_obj2id[eq])
+        # relpose: body2 (the cube) in body1's (the hand's) frame, now
+        R1 = d.xmat[b1].reshape(3, 3)
+        pos = R1.T @ (d.xpos[b2] - d.xpos[b1])
+        q1inv = np.zeros(4)
+        mujoco.mju_negQuat(q1inv, d.xquat[b1])
+        quat = np.zeros(4)
+        mujoco.mju_mulQuat(quat, q1inv, d.xquat[b2])
+        m.eq_data[eq, :] = 0.0
+        m.eq_data[eq, 3:6] = pos
+        m.eq_data[eq, 6:10] = quat
+        m.eq_data[eq, 10] = 1.0  # torquescale
+        d.eq_active[eq] = 1
+        self._grasped[hand] = name
+
+    def release(self, hand: str) -> str | None:
+        """Switch ``hand``'s grasp weld off (the cube is left to the physics where it is);
+        returns the object released, None when the hand held nothing."""
+        if hand not in _HANDS:
+            raise UnknownName("hand", hand, _HANDS)
+        name = self._grasped.pop(hand, None)
+        if name is not None:
+            self.data.eq_active[self._welds[(hand, name)]] = 0
+        return name
 
     def frame_pose(self, name: str) -> Pose:
         """Pose of a site (URDF frame) or body ``name`` in root_link."""

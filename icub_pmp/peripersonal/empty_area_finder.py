@@ -55,20 +55,24 @@ class EmptyAreaFinder:
         self.shared, self.threshold, self.sigma_s = shared, float(threshold), float(sigma_s)
 
     def find(self, objects: object, arm: str = "left", radius: float | None = None,
-             z_range: tuple[float, float] | None = None) -> EmptyArea:
+             z_range: tuple[float, float] | None = None,
+             x_range: tuple[float, float] | None = None) -> EmptyArea:
         """The empty area of ``arm``'s shared neurons for ``objects`` (m, 3) [m] (m may be
         0), at least ``radius`` [m] (default T) from every object, optionally with the
-        neuron's z within ``z_range`` (low, high) [m]."""
+        neuron's z within ``z_range`` and its x within ``x_range`` (low, high) [m] (e.g.
+        over a table)."""
         pts = as_points(objects, "objects") if len(np.atleast_1d(objects)) else np.zeros((0, 3))
         if radius is not None and not (math.isfinite(radius) and radius > 0):
             raise InvalidInput(f"radius: expected a distance > 0 m, got {radius}")
         idx = self.shared.neurons(arm)
         cand = self.shared.points(arm)
-        if z_range is not None:
-            lo, hi = (float(v) for v in z_range)
+        for axis, name, band in ((2, "z_range", z_range), (0, "x_range", x_range)):
+            if band is None:
+                continue
+            lo, hi = (float(v) for v in band)
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise InvalidInput(f"z_range: expected finite low < high [m], got {z_range}")
-            keep = (cand[:, 2] >= lo) & (cand[:, 2] <= hi)
+                raise InvalidInput(f"{name}: expected finite low < high [m], got {band}")
+            keep = (cand[:, axis] >= lo) & (cand[:, axis] <= hi)
             idx, cand = idx[keep], cand[keep]
         need = max(self.threshold, radius or 0.0)
         if len(cand) == 0:

@@ -65,11 +65,15 @@ class ImaginedCollisionCheck:
         config: thresholds, timing, safe posture (:class:`CollisionCheckConfig`).
         planner: the PMP planner on the body model (default: URDF through pinocchio).
         body: the arms' distal frames and capsules (default: fitted to the URDF meshes).
+        frozen_joints: joints that no imagined reach moves (default none).
     """
 
     def __init__(self, config: CollisionCheckConfig | None = None,
-                 planner: PmpPlanner | None = None, body: ArmBodyModel | None = None):
+                 planner: PmpPlanner | None = None, body: ArmBodyModel | None = None,
+                 frozen_joints: Sequence[str] = ()):
         self.config = config or CollisionCheckConfig()
+        #: joints every imagined reach keeps still (e.g. the wrists of a pick-and-place)
+        self.frozen_joints = tuple(frozen_joints)
         self.planner = planner or PmpPlanner()
         self.spec: RobotSpec = self.planner.spec
         self.provider = self.planner.provider
@@ -109,7 +113,8 @@ class ImaginedCollisionCheck:
         if arm not in HANDS:
             raise UnknownName("arm", arm, HANDS)
         p = as_points(target, "target")[0]
-        goal = ReachGoal(targets={arm: p}, use_torso=False, tau=self.config.reach_tau)
+        goal = ReachGoal(targets={arm: p}, use_torso=False, tau=self.config.reach_tau,
+                         frozen_joints=self.frozen_joints)
         return self.planner.plan(goal, q_start)
 
     def park_motion(self, arm: str, q_from: np.ndarray) -> ArmMotion:

@@ -144,6 +144,7 @@ class PeripersonalSpace:
         return self.allocator.allocate(objects)
 
     def empty_area(self, objects: object, arm: str = "left", radius: float | None = None,
-                   z_range: tuple[float, float] | None = None) -> EmptyArea:
+                   z_range: tuple[float, float] | None = None,
+                   x_range: tuple[float, float] | None = None) -> EmptyArea:
         """An empty area of the shared workspace (:class:`EmptyAreaFinder`)."""
-        return self.empty_areas.find(objects, self._arm(arm), radius, z_range)
+        return self.empty_areas.find(objects, self._arm(arm), radius, z_range, x_range)

@@ -59,6 +59,7 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
         CheckReach,
         FindEmptyArea,
         GoToPose,
+        Grasp,
         LookAt,
         PlanPair,
         Reach,
@@ -76,6 +77,8 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
         FuzzTarget("/sim/set_object_pose", SetObjectPose, ("sim_bridge",), 10.0, n(12)),
         FuzzTarget("/sim/apply_wrench", ApplyWrench, ("sim_bridge",), 10.0, n(12)),
         FuzzTarget("/sim/set_paused", SetBool, ("sim_bridge",), 10.0, n(4)),
+        # no cubes in the fuzzed scene: every grasp is refused by name, the node answers
+        FuzzTarget("/sim/grasp", Grasp, ("sim_bridge",), 10.0, n(6)),
         FuzzTarget("/impedance_controller/hold", Trigger, ("impedance_controller",), 10.0,
                    n(3)),
         FuzzTarget("/wrench_estimator/calibrate", Trigger, ("wrench_estimator",), 30.0, n(2)),

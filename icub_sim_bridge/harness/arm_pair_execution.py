@@ -21,7 +21,7 @@ from icub_pmp.control.trajectory_limits import JointRateLimits, scale_trajectory
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_sim_bridge.harness.sim_loop import SimLoop
 
-__all__ = ["shared_target_pairs", "execute_pair", "recall_precision", "PAIR_Z_MIN"]
+__all__ = ["shared_target_pairs", "execute_pair", "send_plans", "recall_precision", "PAIR_Z_MIN"]
 
 #: lowest target [m, root_link]: 6 cm above the table top (z = -0.09)
 PAIR_Z_MIN = -0.03
@@ -41,6 +41,26 @@ def shared_target_pairs(space: Any, n: int, seed: int, z_min: float = PAIR_Z_MIN
     return np.stack([pts["left"][i], pts["right"][j]], axis=1)
 
 
+def send_plans(loop: SimLoop, plans: Mapping[str, Any]) -> tuple[float, float]:
+    """Hand the arms' imagined reaches (``plans``: arm -> ReachPlan) to the controller core
+    now, all slowed down by one factor to the joints' rate limits where needed (as the
+    planner does before execution: the same paths, in step with each other as imagined).
+    Returns (the longest scaled duration [s], the factor)."""
+    ctl = loop.controller
+    limits = JointRateLimits.from_spec(loop.sim.spec)
+    scale = max(limits.report(JointTrajectory(p.joint_names, np.asarray(p.t), p.positions,
+                                              np.asarray(p.velocities))).time_scale
+                for p in plans.values())
+    scale = scale * 1.01 if scale > 1.0 + 1e-3 else 1.0
+    t0 = loop.t
+    for p in plans.values():
+        times, vel, _ = scale_trajectory_time(np.asarray(p.t), np.asarray(p.velocities), None,
+                                              scale)
+        ctl.set_trajectory(ctl.make_trajectory(p.joint_names, times, p.positions, vel,
+                                               start=t0), t0)
+    return max(p.tau for p in plans.values()) * scale, scale
+
+
 def execute_pair(loop: SimLoop, plans: Mapping[str, Any], settle: float) -> dict:
     """Run both imagined reaches (``plans``: arm -> ReachPlan with joint_names, t, positions,
     velocities, tau) in parallel through the controller from the rest posture, both slowed
@@ -53,20 +73,9 @@ def execute_pair(loop: SimLoop, plans: Mapping[str, Any], settle: float) -> dict
     js = sim.joint_state()
     ctl.step(js.time, js.position, js.velocity)  # the controller sees the reset posture ...
     ctl.hold()  # ... and holds it (no set-point left from the previous pair)
-    # both arms slowed down by the same factor to the joints' rate limits (as the planner
-    # does before execution): the same paths, in step with each other as imagined
-    limits = JointRateLimits.from_spec(sim.spec)
-    scale = max(limits.report(JointTrajectory(p.joint_names, np.asarray(p.t), p.positions,
-                                              np.asarray(p.velocities))).time_scale
-                for p in plans.values())
-    scale = scale * 1.01 if scale > 1.0 + 1e-3 else 1.0
     t0 = loop.t
-    for p in plans.values():
-        times, vel, _ = scale_trajectory_time(np.asarray(p.t), np.asarray(p.velocities), None,
-                                              scale)
-        ctl.set_trajectory(ctl.make_trajectory(p.joint_names, times, p.positions, vel,
-                                               start=t0), t0)
-    duration = max(p.tau for p in plans.values()) * scale + settle
+    duration, scale = send_plans(loop, plans)
+    duration += settle
     first, bodies, other = None, set(), set()
     for _ in range(int(round(duration / sim.config.timestep))):
         loop.step()
