@@ -348,8 +348,6 @@ class PmpPlanner:
         z[0] = z_nodes[0]
         z[-1] = z_nodes[-1]
         joints = z[:, : net.n]
-        vel = np.zeros_like(joints)  # central differences, zero at both ends
-        vel[1:-1] = (joints[2:] - joints[:-2]) / (times[2:] - times[:-2])[:, None]
         q_full = np.repeat(net.q_full(z_nodes[0])[None, :], len(times), axis=0)
         q_full[:, net.joint_index] = joints
         names = net.branches.joint_names
@@ -361,8 +359,8 @@ class PmpPlanner:
             extra = [i for _, arm in idle for i in arm]
             names = names + tuple(self._names[i] for i in extra)
             joints = np.hstack([joints, q_full[:, extra]])
-            vel = np.zeros_like(joints)
-            vel[1:-1] = (joints[2:] - joints[:-2]) / (times[2:] - times[:-2])[:, None]
+        vel = np.zeros_like(joints)  # central differences, zero at both ends
+        vel[1:-1] = (joints[2:] - joints[:-2]) / (times[2:] - times[:-2])[:, None]
         q_final = q_full[-1].copy()
         final = self.provider.kinematics(q_final, net.frames)
         residuals, rot_res = {}, {}
