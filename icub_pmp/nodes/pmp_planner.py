@@ -289,7 +289,8 @@ class PmpPlannerNode(Node):
         res.obstacle_clearance = (float(plan.obstacle_clearance)
                                   if plan.obstacle_clearance is not None else -1.0)
         if plan.final_torques is not None:
-            res.torque_joints = list(plan.joint_names)
+            # the network's joints (an idle arm's, appended after them, carries no force)
+            res.torque_joints = list(plan.joint_names[:len(plan.final_torques)])
             res.torques = [float(t) for t in plan.final_torques]
             res.torques_within_limits = bool(
                 np.all(np.abs(plan.final_torques) <= plan.torque_limits))

@@ -61,6 +61,10 @@ class PmpConfig(ConfigBase):
     success_tolerance: float = 1.0e-3  # hand within this of its target at tau [m]
     rotation_success_tolerance: float = 0.01  # [rad]
     start_tolerance: float = 0.05  # start may exceed a limit by this much [rad] (then clamped)
+    # idle hands (decision 0056): a hand that takes no part in a goal with the trunk keeps its
+    # position while the trunk moves (its arm compensates; it does not act on the trunk)
+    hold_idle_hands: bool = False
+    idle_hand_margin: float = 0.05  # the compensating arm stays this far inside its limits [rad]
     # posture memory fallback (Sect. 4)
     posture_memory_size: int = 20000  # babbled postures (0 = no fallback)
     posture_memory_seed: int = 0
@@ -87,7 +91,7 @@ class PmpConfig(ConfigBase):
             if not math.isfinite(v) or v <= 0:
                 raise ConfigError(f"PmpConfig.{name}: expected a finite value > 0, got {v}")
         nonneg = ("curl", "joint_limit_alpha", "posture_field_gain", "start_tolerance",
-                  "max_displacement", "synchronise_hands", "obstacle_step")
+                  "max_displacement", "synchronise_hands", "obstacle_step", "idle_hand_margin")
         for name in nonneg:
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:

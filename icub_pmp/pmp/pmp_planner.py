@@ -31,6 +31,7 @@ from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
 from icub_pmp.pmp.branch_network import BranchNetwork
 from icub_pmp.pmp.force_field import ForceField
+from icub_pmp.pmp.idle_hand_hold import hold_idle_hand
 from icub_pmp.pmp.jacobian_provider import JacobianProvider
 from icub_pmp.pmp.joint_limit_field import JointLimitField
 from icub_pmp.pmp.orientation_field import OrientationField
@@ -347,10 +348,19 @@ class PmpPlanner:
         z[0] = z_nodes[0]
         z[-1] = z_nodes[-1]
         joints = z[:, : net.n]
-        vel = np.zeros_like(joints)  # central differences, zero at both ends
-        vel[1:-1] = (joints[2:] - joints[:-2]) / (times[2:] - times[:-2])[:, None]
         q_full = np.repeat(net.q_full(z_nodes[0])[None, :], len(times), axis=0)
         q_full[:, net.joint_index] = joints
+        names = net.branches.joint_names
+        idle = self._idle_arm_joints(goal, net, joints)
+        if idle:  # decision 0056: the idle hands stay where they were
+            for frame, arm in idle:
+                q_full[:, arm] = hold_idle_hand(self.provider, frame, arm, q_full,
+                                                c.idle_hand_margin)
+            extra = [i for _, arm in idle for i in arm]
+            names = names + tuple(self._names[i] for i in extra)
+            joints = np.hstack([joints, q_full[:, extra]])
+        vel = np.zeros_like(joints)  # central differences, zero at both ends
+        vel[1:-1] = (joints[2:] - joints[:-2]) / (times[2:] - times[:-2])[:, None]
         q_final = q_full[-1].copy()
         final = self.provider.kinematics(q_final, net.frames)
         residuals, rot_res = {}, {}
@@ -383,7 +393,7 @@ class PmpPlanner:
             message += f"; obstacle clearance {clearance * 1e3:.1f} mm"
         plan = ReachPlan(
             hands=net.hands,
-            joint_names=net.branches.joint_names,
+            joint_names=names,
             t=times,
             positions=joints,
             velocities=vel,
@@ -405,6 +415,27 @@ class PmpPlanner:
             torque_limits=torque_limits,
         )
         return plan
+
+    def _idle_arm_joints(self, goal: ReachGoal, net: PmpNetwork, joints: np.ndarray
+                         ) -> list[tuple[str, list[int]]]:
+        """(hand frame, arm joint indices in the provider's q) of every hand that takes no
+        part in ``goal`` while the trunk moves (``hold_idle_hands``); frozen joints and joints
+        the body model lacks are left out."""
+        trunk = net.branches.trunk_slice
+        if (not self.config.hold_idle_hands or not net.branches.trunk_joints
+                or np.ptp(joints[:, trunk], axis=0).max(initial=0.0) <= 0.0):
+            return []
+        frames = set(self.provider.frame_names())
+        out = []
+        for h in HANDS:
+            frame = self.spec.hand_frame(h)
+            if h in net.hands or frame not in frames:
+                continue
+            arm = [self._index[j] for j in self.spec.arm_joints(h)
+                   if j in self._index and j not in goal.frozen_joints]
+            if arm:
+                out.append((frame, arm))
+        return out
 
     def _hand_paths(self, hands, frames, q_full: np.ndarray) -> dict[str, np.ndarray]:
         paths = np.array([self.provider.positions(q, frames) for q in q_full])

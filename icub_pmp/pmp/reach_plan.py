@@ -19,7 +19,9 @@ class ReachPlan:
 
     Attributes:
         hands: the hands that took part, in :attr:`residuals` order.
-        joint_names: joints of the network (the trajectory's joints); others do not move.
+        joint_names: the trajectory's joints: the network's, then the arm joints of idle
+            hands held in place while the trunk moves (``PmpConfig.hold_idle_hands``,
+            decision 0056); others do not move.
         t: (N,) sample times [s], 0 .. tau.
         positions: (N, n) joint angles [rad]; ``positions[-1]`` is the equilibrium.
         velocities: (N, n) [rad/s] (zero at both ends).
@@ -39,7 +41,8 @@ class ReachPlan:
         obstacle_clearance: smallest distance [m] from a hand to an obstacle surface along
             the sampled plan (None without obstacles).
         final_torques: (n,) joint torques [N m] needed at the final posture (target forces
-            + gravity) over ``joint_names`` (None without target forces or torque limits).
+            + gravity) over the network's joints (the first n of ``joint_names``; None
+            without target forces or torque limits).
         torque_limits: (n,) the limits [N m] they were held to (None likewise).
         attempts: relaxations run (1 + those guided by remembered postures).
         used_memory: whether the posture-memory relaxation gave the returned plan.
