@@ -13,7 +13,9 @@ publishes  /clock (every ``clock_decimation`` steps: 100 Hz of simulated time by
            frame l_eye_optical / r_eye_optical), /ground_truth/contact_wrench/{left,right}_hand
            (root_link, about the hand frame), /ground_truth/objects/{box,cylinder} (PoseStamped),
            /ground_truth/self_contacts (icub_interfaces/SelfContacts: the arms touching each
-           other or the torso, root_link; an empty list when nothing touches)
+           other or the torso, root_link; an empty list when nothing touches),
+           /ground_truth/object_contacts (the same type: the robot's links touching the box
+           or the cylinder, kind robot-object, body1 the link, body2 the object)
 subscribes /effort_command (JointState name + effort [N m]; any subset of joints; rejected
            whole with a throttled warning on unknown names, NaN/inf, length mismatch)
            /sim/status (icub_interfaces/SimStatus, reliable + transient local: running,
@@ -155,6 +157,8 @@ class SimBridge(Node):
         self.pub_obj = {o: self.create_publisher(PoseStamped, f"/ground_truth/objects/{o}", sd)
                         for o in self.sim.object_names}
         self.pub_self = self.create_publisher(SelfContacts, "/ground_truth/self_contacts", sd)
+        self.pub_obj_contacts = self.create_publisher(SelfContacts,
+                                                      "/ground_truth/object_contacts", sd)
         # --- reusable messages (filled in place every step)
         self._clock_msg = Clock()
         self._js_writer = RawJointStateWriter(list(self._names))
@@ -172,6 +176,8 @@ class SimBridge(Node):
             self._gt_msgs[h] = m
         self._self_msg = SelfContacts()
         self._self_msg.header.frame_id = "root_link"
+        self._obj_contacts_msg = SelfContacts()
+        self._obj_contacts_msg.header.frame_id = "root_link"
         self._obj_msgs = {}
         for o in self.sim.object_names:
             m = PoseStamped()
@@ -455,18 +461,22 @@ class SimBridge(Node):
                 m.pose.orientation.y, m.pose.orientation.z = float(q[2]), float(q[3])
                 pub.publish(m)
             if self._active(self.pub_self):
-                self._publish_self_contacts(ns)
+                self._publish_contacts(ns, self._self_msg, self.sim.self_contacts(),
+                                       self.pub_self)
+            if self._active(self.pub_obj_contacts):
+                self._publish_contacts(ns, self._obj_contacts_msg, self.sim.object_contacts(),
+                                       self.pub_obj_contacts)
         if self.cameras is not None and ns >= self._next_cam_ns and (
                 self._active(self.pub_img["left"]) or self._active(self.pub_img["right"])
                 or self._active(self.pub_info["left"]) or self._active(self.pub_info["right"])):
             self._next_cam_ns = ns + self._cam_period_ns
             self.cameras.request(sim.data)
 
-    def _publish_self_contacts(self, ns: int) -> None:
-        m = self._self_msg
+    def _publish_contacts(self, ns: int, m: SelfContacts, found: list, pub: Any) -> None:
+        """Publish the contact records ``found`` (Simulator.self_contacts/object_contacts)."""
         _set_stamp(m.header.stamp, ns)
         contacts = []
-        for c in self.sim.self_contacts():
+        for c in found:
             cm = SelfContactMsg()
             cm.body1, cm.body2, cm.kind = c.body1, c.body2, c.kind
             _set_vec(cm.position, c.position)
@@ -474,7 +484,7 @@ class SimBridge(Node):
             cm.normal_force, cm.depth = c.normal_force, c.depth
             contacts.append(cm)
         m.contacts = contacts
-        self.pub_self.publish(m)
+        pub.publish(m)
 
     # ------------------------------------------------------------------ status
     def _check_divergence(self) -> None:

@@ -30,6 +30,8 @@ step, torque applied during it):
   applied forces), root_link axes, moment about the hand frame origin (``l_hand_dh_frame``).
 - :meth:`self_contacts` -- ground truth: the robot touching itself (left arm against right
   arm, an arm against the torso), one :class:`SelfContact` per MuJoCo contact point.
+- :meth:`object_contacts` -- ground truth: the robot touching a scene object (box, cylinder),
+  same records (kind ``robot-object``).
 
 Scene: :meth:`object_pose`, :meth:`set_object_pose` (``box``, ``cylinder``),
 :meth:`apply_wrench` (a scripted external wrench on a body or at a frame for a duration).
@@ -80,13 +82,16 @@ from icub_sim_bridge.robot_imperfections import RobotImperfections
 from icub_sim_bridge.sim_config import SimConfig
 
 __all__ = ["Simulator", "JointState", "Wrench", "Pose", "ImuReading", "SelfContact",
-           "Divergence", "FT_SENSORS", "FT_SIGN_CONVENTION", "SELF_CONTACT_KINDS"]
+           "Divergence", "FT_SENSORS", "FT_SIGN_CONVENTION", "SELF_CONTACT_KINDS",
+           "OBJECT_CONTACT_KIND"]
 
 FT_SENSORS = ("l_arm_ft", "r_arm_ft", "l_leg_ft", "r_leg_ft")
 FT_SIGN_CONVENTION = "child_to_parent"
 _HANDS = ("left", "right")
 #: arm-arm: a left-arm link against a right-arm link; arm-torso: an arm link against the torso
 SELF_CONTACT_KINDS = ("arm-arm", "arm-torso")
+#: the kind of :meth:`Simulator.object_contacts` records
+OBJECT_CONTACT_KIND = "robot-object"
 _TENDON_JOINTS = ("eyes_version", "eyes_vergence")
 #: hold gains per N m of torque limit: kp = 5 * tau_max [N m/rad], kd = 0.2 * tau_max [N m s/rad]
 _HOLD_KP_PER_NM = 5.0
@@ -136,9 +141,10 @@ class ImuReading(NamedTuple):
 
 
 class SelfContact(NamedTuple):
-    """One contact point between two links of the robot.
+    """One contact point between two links of the robot, or a link and a scene object.
 
-    ``body1`` is the left-arm link of an arm-arm contact, the arm link of an arm-torso one;
+    ``body1`` is the left-arm link of an arm-arm contact, the arm link of an arm-torso one,
+    the robot's link of a robot-object one;
     ``force`` (3,) [N] is what ``body2`` exerts on ``body1`` (root_link axes), ``normal_force``
     [N] its normal component, ``depth`` [m] the penetration, ``position`` (3,) [m] the
     contact point in root_link."""
@@ -245,6 +251,10 @@ class Simulator:
             name = m.body(b).name
             self._geom_side[g] = 1 if name.startswith("l_") else 2 if name.startswith("r_") \
                 else 3
+        # scene objects: index + 1 of the object each geom belongs to (0: none)
+        self._geom_object = np.zeros(m.ngeom, dtype=int)
+        for k, (b, _, _) in enumerate(self._objects.values()):
+            self._geom_object[m.geom_bodyid == b] = k + 1
         self._f6 = np.zeros(6)
         # hold gains (an affine actuator PD, see _set_held) and the dofs for gravity terms
         self._kp = _HOLD_KP_PER_NM * self.torque_limits
@@ -594,27 +604,49 @@ class Simulator:
     def self_contacts(self) -> list[SelfContact]:
         """Ground truth: the robot's links touching each other now (class doc of
         :class:`SelfContact`); empty when none do."""
-        d, m = self.data, self.model
+        d = self.data
         if d.ncon == 0:
             return []
         s1 = self._geom_side[d.contact.geom1]
         s2 = self._geom_side[d.contact.geom2]
         out = []
         for i in np.flatnonzero((s1 > 0) & (s2 > 0) & (s1 != s2)):
-            c = d.contact[i]
-            mujoco.mj_contactForce(m, d, int(i), self._f6)
-            # contact frame: first row = normal from geom1 to geom2; the force is on geom2
-            on_2 = c.frame.reshape(3, 3).T @ self._f6[:3]
-            b1, b2 = int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])
             k1, k2 = s1[i], s2[i]
-            if k1 > k2:  # body1: the left arm's link, or the arm's against the torso
-                b1, b2, on_1 = b2, b1, on_2
-            else:
-                on_1 = -on_2
             kind = "arm-torso" if 3 in (k1, k2) else "arm-arm"
-            out.append(SelfContact(kind, m.body(b1).name, m.body(b2).name, c.pos.copy(), on_1,
-                                   float(self._f6[0]), float(max(-c.dist, 0.0))))
+            # body1: the left arm's link, or the arm's against the torso
+            out.append(self._contact(int(i), kind, first_is_geom1=bool(k1 <= k2)))
         return out
+
+    def object_contacts(self) -> list[SelfContact]:
+        """Ground truth: the robot touching a scene object (``object_names``) now, one
+        :class:`SelfContact` of kind ``robot-object`` per contact point: ``body1`` the robot's
+        link, ``body2`` the object, ``force`` what the object exerts on the link; empty when
+        no link touches an object."""
+        d = self.data
+        if d.ncon == 0:
+            return []
+        g1, g2 = d.contact.geom1, d.contact.geom2
+        r1, r2 = self._geom_side[g1] > 0, self._geom_side[g2] > 0
+        o1, o2 = self._geom_object[g1] > 0, self._geom_object[g2] > 0
+        return [self._contact(int(i), OBJECT_CONTACT_KIND,
+                              first_is_geom1=bool(r1[i]))
+                for i in np.flatnonzero((r1 & o2) | (o1 & r2))]
+
+    def _contact(self, i: int, kind: str, first_is_geom1: bool) -> SelfContact:
+        """MuJoCo contact ``i`` as a :class:`SelfContact` whose ``body1`` is the body of geom1
+        (``first_is_geom1``) or of geom2, the force being the one exerted on ``body1``."""
+        d, m = self.data, self.model
+        c = d.contact[i]
+        mujoco.mj_contactForce(m, d, i, self._f6)
+        # contact frame: first row = normal from geom1 to geom2; the force is on geom2
+        on_2 = c.frame.reshape(3, 3).T @ self._f6[:3]
+        b1, b2 = int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])
+        if first_is_geom1:
+            on_1 = -on_2
+        else:
+            b1, b2, on_1 = b2, b1, on_2
+        return SelfContact(kind, m.body(b1).name, m.body(b2).name, c.pos.copy(), on_1,
+                           float(self._f6[0]), float(max(-c.dist, 0.0)))
 
     def frame_pose(self, name: str) -> Pose:
         """Pose of a site (URDF frame) or body ``name`` in root_link."""

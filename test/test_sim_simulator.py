@@ -8,6 +8,7 @@ import pytest
 
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics import RobotSpec
+from icub_sim_bridge.simulator import OBJECT_CONTACT_KIND
 
 
 def test_reset_puts_posture_and_holds_it(sim):
@@ -178,6 +179,25 @@ def test_the_two_arms_collide_with_each_other(sim):
     left = sim.frame_pose("l_hand_dh_frame").position[1]
     right = sim.frame_pose("r_hand_dh_frame").position[1]
     assert left < right
+
+
+def test_object_contacts_report_the_hand_on_the_cylinder(sim):
+    """object_contacts is empty while nothing touches an object; with the cylinder teleported
+    onto the right hand, it reports robot-object contacts (the robot's link first, the
+    cylinder second, a positive normal force), and none of them is a self contact."""
+    sim.reset("rest")
+    sim.step(50)
+    assert sim.object_contacts() == []
+    hand = sim.frame_pose("r_hand_dh_frame").position
+    sim.set_object_pose("cylinder", hand + [0.0, 0.0, 0.09])
+    seen = []
+    for _ in range(100):
+        sim.step(5)
+        seen += sim.object_contacts()
+    assert seen and all(c.kind == OBJECT_CONTACT_KIND for c in seen)
+    assert all(c.body1.startswith("r_") and c.body2 == "cylinder" for c in seen)
+    assert max(c.normal_force for c in seen) > 0.0
+    assert all(c.kind != OBJECT_CONTACT_KIND for c in sim.self_contacts())
 
 
 @pytest.mark.parametrize("target, force, torque, duration, match", [
