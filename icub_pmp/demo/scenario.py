@@ -32,9 +32,10 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
    carry the force target (``right_force``). Judged by :func:`judge_press`: the estimated
    external force within 10 % of the target, reported beside the simulator's contact force.
 
-A phase that fails does not stop the next. Every phase is measured in the physics: the hand positions at the end of the motion come from
-the simulator's /joint_states through the model's forward kinematics. Then the bag is replayed
-and checked, and a report (PNG plots + ``report.md``) is written beside it.
+A phase that fails does not stop the next. Every phase is measured in the physics: the hand
+positions come from the simulator's /joint_states through the model's forward kinematics.
+Then the bag is replayed and checked, and a report (PNG plots + ``report.md``) is written
+beside it.
 """
 
 from __future__ import annotations
