@@ -765,9 +765,12 @@ def cylinder_obstacle(position: np.ndarray) -> object:
 
 #: phase 5: the right hand's start and target on either side of the cylinder, placed between
 #: them on the table [m, root_link], and the clearance the plan keeps from it [m]
-OBSTACLE_START = np.array([-0.30, 0.32, -0.02])
-OBSTACLE_TARGET = np.array([-0.30, 0.04, -0.02])
-OBSTACLE_POSITION = np.array([-0.30, 0.17, -0.03])
+#: (the straight way passes 2 cm below the cylinder's top; the plan goes over it. Placed beside
+#: the hand's way rather than ahead of it: only the hand is kept clear by the planner, and the
+#: forearm trailing a hand that goes around an object ahead of it swept the object in trials)
+OBSTACLE_START = np.array([-0.36, 0.34, 0.02])
+OBSTACLE_TARGET = np.array([-0.36, 0.02, 0.02])
+OBSTACLE_POSITION = np.array([-0.36, 0.17, -0.03])
 OBSTACLE_CLEARANCE = 0.06
 
 
@@ -777,7 +780,7 @@ def obstacle_reach(runner: DemoRunner, name: str = "obstacle_reach") -> PhaseRes
     ground-truth pose, as a perception node would give it) and is judged in the physics
     (:func:`judge_obstacle_reach`: arrival, no robot-object contact on
     /ground_truth/object_contacts, the cylinder not moved)."""
-    runner.pmp_reach(f"{name}_up", {"right": OBSTACLE_START + [0.08, 0.0, 0.14]},
+    runner.pmp_reach(f"{name}_up", {"right": np.array([-0.22, 0.34, 0.12])},
                      use_torso=True, tau=1.5, judge_physics=False)
     runner.set_object("cylinder", OBSTACLE_POSITION)
     runner.wait_sim(0.3)
@@ -786,7 +789,7 @@ def obstacle_reach(runner: DemoRunner, name: str = "obstacle_reach") -> PhaseRes
     before = runner.object_position("cylinder")
     runner.object_contacts = []
     try:
-        r = runner.pmp_reach(name, {"right": OBSTACLE_TARGET}, use_torso=True, tau=2.0,
+        r = runner.pmp_reach(name, {"right": OBSTACLE_TARGET}, use_torso=True, tau=3.0,
                              judge_physics=False, obstacles=[cylinder_obstacle(before)],
                              obstacle_clearance=OBSTACLE_CLEARANCE)
     finally:
@@ -819,6 +822,8 @@ def joint_stiffness(joints: list[str]) -> dict[str, float]:
 PRESS_POINT = np.array([-0.30, 0.15, -0.09])
 PRESS_FORCE = np.array([0.0, 0.0, -10.0])
 PRESS_ITERATIONS = 4
+#: where the cylinder waits during the press (far corner of the table) [m, root_link]
+PRESS_CYLINDER_AWAY = np.array([-0.56, 0.38, -0.03])
 
 
 def press_compliance_scale(previous: tuple[np.ndarray, float] | None,
@@ -861,6 +866,7 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     spec = runner.model.spec
     stiffness = joint_stiffness(list(spec.torso_joints) + list(spec.arm_joints("right")))
     frame = spec.hand_frame("right")
+    runner.set_object("cylinder", PRESS_CYLINDER_AWAY)  # phase 5 left it beside the point
     runner.pmp_reach(f"{name}_above", {"right": PRESS_POINT + [0.0, 0.0, 0.08]},
                      use_torso=True, tau=1.5, judge_physics=False)
     runner.pmp_reach(f"{name}_touch", {"right": PRESS_POINT}, use_torso=True, tau=1.5,
@@ -935,10 +941,11 @@ def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]
 #: the box side at the pre-grasp [m]
 BOX_HALF_WIDTH = 0.10
 PREGRASP_GAP = 0.045
-#: the hand frames' offset outside the box sides at the squeeze [m]: the palms, about 1.5 cm
-#: from the frames, are commanded a few mm into the box (about 15 N each, measured: 2 cm inside
-#: the sides gave 66-71 N)
-SQUEEZE_OFFSET = 0.008
+#: the hand frames' offset outside the box sides at the squeeze [m]: the palms, about 2 cm
+#: from the frames, are commanded a few mm into the box (measured squeeze per hand: 8.3-8.6 N;
+#: 0.008 gave 14-15 N, 0.014 gave 7.5-7.9 N and the box slipped out at the lift, the old
+#: 2 cm inside the sides 66-71 N)
+SQUEEZE_OFFSET = 0.012
 
 
 def bimanual_pregrasp(box: np.ndarray) -> dict[str, np.ndarray]:
@@ -959,7 +966,7 @@ def run_phases(runner: DemoRunner, quick: bool) -> list[PhaseResult]:
     print("demo: phase 2, bimanual squeeze and lift", flush=True)
     # squeeze: the hand frames are commanded SQUEEZE_OFFSET outside the box sides, which puts
     # the palms (about 1.5 cm from the frames) a few mm inside: the stiff joint controller
-    # presses them on the box (about 15 N each); judged by the estimator's contact flags
+    # presses them on the box (about 8 N each); judged by the estimator's contact flags
     squeeze = {"left": box + [0.0, -(half_w + SQUEEZE_OFFSET), 0.0],
                "right": box + [0.0, half_w + SQUEEZE_OFFSET, 0.0]}
     r = runner.pmp_reach("bimanual_squeeze", squeeze, use_torso=True, tau=1.0,
