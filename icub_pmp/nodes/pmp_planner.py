@@ -281,7 +281,8 @@ class PmpPlannerNode(Node):
         hand_positions = dict(zip(HANDS, self.urdf_provider.positions(q_urdf, hand_frames)))
         return parse_reach_request(
             req, frames=self._frame_lookup(q_urdf), hand_positions=hand_positions,
-            joint_names=self._names, config=self.params.get(ReachRequestConfig), scene=self._scene)
+            joint_names=self._names, config=self.params.get(ReachRequestConfig), scene=self._scene,
+            hand_frames=dict(zip(HANDS, hand_frames)))
 
     def _urdf_q(self, q: np.ndarray) -> np.ndarray:
         """The URDF model's configuration of the planner's configuration ``q``."""
