@@ -9,9 +9,10 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
 2. ``bimanual_squeeze`` and ``bimanual_transport``: both hands squeeze the box (the hand frames
    commanded ``SQUEEZE_OFFSET`` outside its sides, so the palms press a few mm in; the
    estimator's contact flags confirm both touch) and lift it 8 cm with the object coupling of
-   Sect. 3.2 (Fig 8): the goal pulls the held box, the box pulls both hands. The planner starts
-   a transport from the controller's set-point, so the squeeze is kept rather than released
-   at the start and rebuilt during the lift. Judged in the physics (:func:`judge_transport`):
+   Sect. 3.2 (Fig 8): the goal pulls the held box, the box pulls both hands, which keep their
+   orientations (``use_orientation``). The planner starts a transport from the controller's
+   set-point, so the squeeze is kept rather than released at the start and rebuilt during the
+   lift. Judged in the physics (:func:`judge_transport`):
    the hand-to-hand distance from /joint_states through forward kinematics at every sample of
    the motion stays within 5 mm of its start, and the box rises by 4 cm or more.
 3. ``vision_reach``: the cylinder is moved across the table while the gaze controller tracks
