@@ -480,7 +480,8 @@ class SimBridge(Node):
                 m.pose.orientation.y, m.pose.orientation.z = float(q[2]), float(q[3])
                 pub.publish(m)
             if self._active(self.pub_self):
-                self._publish_self_contacts(ns)
+                self._publish_contacts(ns, self._self_msg, self.sim.self_contacts(),
+                                       self.pub_self)
             if self._active(self.pub_objc):
                 self._publish_object_contacts(ns)
         if self.cameras is not None and ns >= self._next_cam_ns and (
@@ -489,11 +490,11 @@ class SimBridge(Node):
             self._next_cam_ns = ns + self._cam_period_ns
             self.cameras.request(sim.data)
 
-    def _publish_self_contacts(self, ns: int) -> None:
-        m = self._self_msg
+    def _publish_contacts(self, ns: int, m: SelfContacts, found: list, pub: Any) -> None:
+        """Publish the contact records ``found`` (Simulator.self_contacts/object_contacts)."""
         _set_stamp(m.header.stamp, ns)
         contacts = []
-        for c in self.sim.self_contacts():
+        for c in found:
             cm = SelfContactMsg()
             cm.body1, cm.body2, cm.kind = c.body1, c.body2, c.kind
             _set_vec(cm.position, c.position)
@@ -501,7 +502,7 @@ class SimBridge(Node):
             cm.normal_force, cm.depth = c.normal_force, c.depth
             contacts.append(cm)
         m.contacts = contacts
-        self.pub_self.publish(m)
+        pub.publish(m)
 
     def _publish_object_contacts(self, ns: int) -> None:
         m = self._objc_msg

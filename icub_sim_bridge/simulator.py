@@ -96,6 +96,7 @@ FT_SIGN_CONVENTION = "child_to_parent"
 _HANDS = ("left", "right")
 #: arm-arm: a left-arm link against a right-arm link; arm-torso: an arm link against the torso
 SELF_CONTACT_KINDS = ("arm-arm", "arm-torso")
+#: the kind of :meth:`Simulator.object_contacts` records
 _TENDON_JOINTS = ("eyes_version", "eyes_vergence")
 #: hold gains per N m of torque limit: kp = 5 * tau_max [N m/rad], kd = 0.2 * tau_max [N m s/rad]
 _HOLD_KP_PER_NM = 5.0
@@ -145,9 +146,10 @@ class ImuReading(NamedTuple):
 
 
 class SelfContact(NamedTuple):
-    """One contact point between two links of the robot.
+    """One contact point between two links of the robot, or a link and a scene object.
 
-    ``body1`` is the left-arm link of an arm-arm contact, the arm link of an arm-torso one;
+    ``body1`` is the left-arm link of an arm-arm contact, the arm link of an arm-torso one,
+    the robot's link of a robot-object one;
     ``force`` (3,) [N] is what ``body2`` exerts on ``body1`` (root_link axes), ``normal_force``
     [N] its normal component, ``depth`` [m] the penetration, ``position`` (3,) [m] the
     contact point in root_link."""
@@ -635,26 +637,17 @@ class Simulator:
     def self_contacts(self) -> list[SelfContact]:
         """Ground truth: the robot's links touching each other now (class doc of
         :class:`SelfContact`); empty when none do."""
-        d, m = self.data, self.model
+        d = self.data
         if d.ncon == 0:
             return []
         s1 = self._geom_side[d.contact.geom1]
         s2 = self._geom_side[d.contact.geom2]
         out = []
         for i in np.flatnonzero((s1 > 0) & (s2 > 0) & (s1 != s2)):
-            c = d.contact[i]
-            mujoco.mj_contactForce(m, d, int(i), self._f6)
-            # contact frame: first row = normal from geom1 to geom2; the force is on geom2
-            on_2 = c.frame.reshape(3, 3).T @ self._f6[:3]
-            b1, b2 = int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])
             k1, k2 = s1[i], s2[i]
-            if k1 > k2:  # body1: the left arm's link, or the arm's against the torso
-                b1, b2, on_1 = b2, b1, on_2
-            else:
-                on_1 = -on_2
             kind = "arm-torso" if 3 in (k1, k2) else "arm-arm"
-            out.append(SelfContact(kind, m.body(b1).name, m.body(b2).name, c.pos.copy(), on_1,
-                                   float(self._f6[0]), float(max(-c.dist, 0.0))))
+            # body1: the left arm's link, or the arm's against the torso
+            out.append(self._contact(int(i), kind, first_is_geom1=bool(k1 <= k2)))
         return out
 
     def object_contacts(self) -> list[ObjectContact]:
@@ -743,6 +736,22 @@ class Simulator:
         if name is not None:
             self.data.eq_active[self._welds[(hand, name)]] = 0
         return name
+
+    def _contact(self, i: int, kind: str, first_is_geom1: bool) -> SelfContact:
+        """MuJoCo contact ``i`` as a :class:`SelfContact` whose ``body1`` is the body of geom1
+        (``first_is_geom1``) or of geom2, the force being the one exerted on ``body1``."""
+        d, m = self.data, self.model
+        c = d.contact[i]
+        mujoco.mj_contactForce(m, d, i, self._f6)
+        # contact frame: first row = normal from geom1 to geom2; the force is on geom2
+        on_2 = c.frame.reshape(3, 3).T @ self._f6[:3]
+        b1, b2 = int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])
+        if first_is_geom1:
+            on_1 = -on_2
+        else:
+            b1, b2, on_1 = b2, b1, on_2
+        return SelfContact(kind, m.body(b1).name, m.body(b2).name, c.pos.copy(), on_1,
+                           float(self._f6[0]), float(max(-c.dist, 0.0)))
 
     def frame_pose(self, name: str) -> Pose:
         """Pose of a site (URDF frame) or body ``name`` in root_link."""

@@ -303,3 +303,44 @@ def test_cli_bad_flags_exit_with_one_line(args, expected):
     assert out.returncode != 0
     err = out.stderr.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("icub: error:") and expected in err[0], out.stderr
+
+
+def test_a_transport_starts_from_the_controllers_set_point(node, ros_probe, model):
+    """A held object is carried from the commanded grasp: with a recent set-point on
+    /impedance_controller/state (the elbows bent 0.1 rad more than measured, as a squeeze
+    leaves them), the transport's first point is that set-point and the message says so; with
+    a set-point 5 s older than the joint states, the plan starts from the measured joints."""
+    from builtin_interfaces.msg import Time
+
+    rest = model.posture("rest")
+    commanded = rest.copy()
+    for j in ("l_elbow", "r_elbow"):
+        commanded[model.indices([j])[0]] += 0.1
+    names = list(model.joint_names)
+    pub = ros_probe.node.create_publisher(JointState, "/impedance_controller/state", 10)
+    mid = 0.5 * (model.frame_position(rest, "l_hand_dh_frame")
+                 + model.frame_position(rest, "r_hand_dh_frame"))
+
+    def transport() -> Reach.Response:
+        req = request(hands=("left", "right"), hold_object=True, use_torso=True)
+        set_xyz(req.object_goal.pose.position, mid + [0.0, 0.0, 0.05])
+        return call(ros_probe, node, req)
+
+    try:
+        recent = make_joint_state(names, position=commanded)
+        timer = ros_probe.node.create_timer(0.05, lambda: pub.publish(recent))
+        assert ros_probe.wait_for(lambda: "from the controller's set-point" in
+                                  transport().message, 30.0)
+        resp = transport()
+        assert resp.success and "controller's set-point" in resp.message, resp.message
+        assert abs(joint_path(resp, "r_elbow")[0] - commanded[model.indices(["r_elbow"])[0]]) \
+            < 1e-6
+        ros_probe.destroy(timer)
+        old = make_joint_state(names, position=commanded, stamp=Time(sec=5))
+        timer = ros_probe.node.create_timer(0.05, lambda: pub.publish(old))
+        assert ros_probe.wait_for(lambda: "no recent controller set-point" in
+                                  transport().message, 30.0)
+        resp = transport()
+        assert abs(joint_path(resp, "r_elbow")[0] - rest[model.indices(["r_elbow"])[0]]) < 1e-6
+    finally:
+        ros_probe.destroy(timer, pub)

@@ -109,6 +109,20 @@ def test_held_object_from_the_hands_and_with_grasp_points():
     assert np.allclose(ho.goal, CHEST.rotation @ [-0.25, 0.0, 0.15] + CHEST.translation)
 
 
+def test_a_held_object_with_use_orientation_keeps_the_hands_start_orientations():
+    """hold_object + use_orientation: each grasping hand's orientation target is its frame's
+    rotation at the start (a rigid grasp in translation does not turn the hands); without
+    use_orientation the hands are free to turn; without the hands' frames it is refused."""
+    assert parse(held()).goal.orientations == {}
+    g = parse_reach_request(held(use_orientation=True), frames=frames, hand_positions=HANDS_AT,
+                            joint_names=JOINTS, config=CONFIG,
+                            hand_frames={"left": "chest", "right": "chest"}).goal
+    assert sorted(g.orientations) == ["left", "right"]
+    assert np.allclose(g.orientations["right"], CHEST.rotation)
+    with pytest.raises(InvalidInput, match="use_orientation with hold_object"):
+        parse(held(use_orientation=True))
+
+
 def test_obstacles_are_built_in_root_link_and_grown_by_the_clearance():
     """Each primitive becomes a field in root_link; the fields keep clearance + margin; the
     default clearance comes from the configuration."""

@@ -213,6 +213,41 @@ def test_self_contacts_when_the_arms_meet(bridge, ros_probe):
     assert math.hypot(c.force.x, c.force.y, c.force.z) > 0.0
     ros_probe.destroy(sub)
     ros_probe.destroy(pub)
+
+
+def test_object_contacts_when_the_cylinder_drops_on_the_hand(bridge, ros_probe):
+    """/ground_truth/object_contacts (root_link) is an empty list while no link touches an
+    object; the cylinder dropped onto the resting right hand is reported as robot-object
+    contacts (icub_interfaces/ObjectContacts): the right arm's link and the cylinder, with a
+    normal force."""
+    from rclpy.qos import qos_profile_sensor_data
+
+    from icub_pmp.kinematics import IcubModel
+
+    _wait_up(ros_probe, bridge)
+    assert _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="rest")).success
+    from icub_interfaces.msg import ObjectContacts
+
+    rest = ros_probe.collect("/ground_truth/object_contacts", ObjectContacts, 3)
+    assert len(rest) == 3 and rest[-1].header.frame_id == "root_link"
+    assert all(len(m.contacts) == 0 for m in rest)
+    model = IcubModel()
+    hand = model.frame_position(model.posture("rest"), "r_hand_dh_frame")
+    got = []
+    sub = ros_probe.node.create_subscription(
+        ObjectContacts, "/ground_truth/object_contacts",
+        lambda m: got.append(m) if m.contacts else None, qos_profile_sensor_data)
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in hand + [0, 0, 0.09])
+    pose.orientation.w = 1.0
+    r = _call(ros_probe, "/sim/set_object_pose", SetObjectPose,
+              SetObjectPose.Request(name="cylinder", pose=pose))
+    assert r.success, r.message
+    assert ros_probe.wait_for(lambda: bool(got), 30.0), bridge.output()[-2000:]
+    c = got[0].contacts[0]
+    assert c.object == "cylinder" and c.body.startswith("r_") and c.arm == "right"
+    assert max(c.normal_force for m in got for c in m.contacts) > 0.0
+    ros_probe.destroy(sub)
     assert _call(ros_probe, "/sim/reset", ResetSim, ResetSim.Request(posture="rest")).success
 
 

@@ -180,6 +180,25 @@ def test_the_two_arms_collide_with_each_other(sim):
     assert left < right
 
 
+def test_object_contacts_report_the_hand_on_the_cylinder(sim):
+    """object_contacts is empty while nothing touches an object; with the cylinder teleported
+    onto the right hand, it reports the right arm's links touching the cylinder (not grasped,
+    a positive normal force), and none of them is a self contact."""
+    sim.reset("rest")
+    sim.step(50)
+    assert sim.object_contacts() == []
+    hand = sim.frame_pose("r_hand_dh_frame").position
+    sim.set_object_pose("cylinder", hand + [0.0, 0.0, 0.09])
+    seen = []
+    for _ in range(100):
+        sim.step(5)
+        seen += sim.object_contacts()
+    assert seen and all(c.object == "cylinder" and not c.grasped for c in seen)
+    assert all(c.body.startswith("r_") and c.arm == "right" for c in seen)
+    assert max(c.normal_force for c in seen) > 0.0
+    assert all("cylinder" not in (c.body1, c.body2) for c in sim.self_contacts())
+
+
 @pytest.mark.parametrize("target, force, torque, duration, match", [
     ("box", [1e6, 0, 0], [0, 0, 0], 0.2, r"\|force\| = 1e\+06 N is beyond max_wrench_force"),
     ("r_hand", [0, 0, 5], [0, 20, 0], 1.0, r"\|torque\| = 20 N m is beyond max_wrench_torque"),

@@ -8,6 +8,8 @@ answers with the arrival error measured on the robot after the hands settled
 (:class:`~icub_pmp.ros.goal_execution.GoalExecution`). Outcomes: reached, not_reached,
 unreachable (the mental simulation failed: nothing moves), aborted (with the reason: the
 controller's safe hold, a missing controller, a newer goal), canceled, rejected (bad goal).
+A held-object transport (``hold_object``) starts from the impedance controller's set-point
+(/impedance_controller/state) when it is recent, so a squeezing grasp keeps its squeeze.
 
 Service ``/pmp/reach`` (icub_interfaces/srv/Reach), for mental simulation and quick calls:
 plans the goal with a PMP network from the
@@ -82,6 +84,11 @@ from icub_pmp.ros.warning_throttle import WarningThrottle
 
 __all__ = ["PmpPlannerNode", "main"]
 
+#: a controller set-point at most this much older or newer than the measured joint state
+#: [s, simulated] may start a held-object transport (it is published every 10 ms)
+SETPOINT_MAX_LAG = 0.05
+
+
 class PmpPlannerNode(Node):
     """Serves /pmp/reach with a :class:`~icub_pmp.pmp.PmpPlanner`."""
 
@@ -101,6 +108,9 @@ class PmpPlannerNode(Node):
         self._names = self.planner.provider.joint_names
         self._valid_state_names = set(self.planner.spec.actuated_joints)
         self.joint_states = JointStateCache(self)
+        # the controller's set-point: a held object is carried from the commanded grasp
+        self.setpoints = JointStateCache(self, "/impedance_controller/state",
+                                         suffix="setpoints")
         self.rate_limits = JointRateLimits.from_spec(self.planner.spec)
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self.trajectory_pub = self.create_publisher(JointTrajectory, "/joint_trajectory", reliable)
@@ -167,6 +177,24 @@ class PmpPlannerNode(Node):
                                       f"{sorted(unknown)}", throttle_duration_sec=5.0)
             return None
         return st.positions
+
+    def _held_start(self, req, start: dict[str, float]) -> tuple[dict[str, float], str]:
+        """The start of a held-object transport: the controller's set-point
+        (/impedance_controller/state) over the measured posture, when it is as recent as the
+        measured state (within ``SETPOINT_MAX_LAG`` of simulated time). A squeezing grasp
+        commands the palms inside the object, which holds them apart: planned from the
+        measured hands, the trajectory would start by releasing the squeeze and rebuild it
+        during the transport (the measured hand-to-hand distance changing with it; Sect. 3.2
+        keeps the grasp). Other goals, or without a recent set-point: ``start`` as given.
+        Returns (start, note for the message)."""
+        if not req.hold_object:
+            return start, ""
+        sp, measured = self.setpoints.latest(), self.joint_states.latest()
+        if sp is None or measured is None or abs(sp.t - measured.t) > SETPOINT_MAX_LAG:
+            return start, " (no recent controller set-point: planned from the measured joints)"
+        out = dict(start)
+        out.update({j: v for j, v in sp.positions.items() if j in self._valid_state_names})
+        return out, " (planned from the controller's set-point: the grasp's squeeze is kept)"
 
     def _limited_trajectory(self, plan) -> tuple[JointTrajectory, float, str]:
         """The plan as a trajectory message within the joints' velocity and acceleration
@@ -238,7 +266,8 @@ class PmpPlannerNode(Node):
             note = "" if current else " (joints missing from start_state taken from 'rest')"
             return start, False, note
         if current is not None:
-            return dict(current), False, ""
+            start, note = self._held_start(req, dict(current))
+            return start, False, note
         if not self.node_config.plan_from_rest_without_state:
             raise InvalidInput("no /joint_states received yet and no start_state given")
         return (dict(self.planner.spec.posture("rest")), True,
@@ -252,7 +281,8 @@ class PmpPlannerNode(Node):
         hand_positions = dict(zip(HANDS, self.urdf_provider.positions(q_urdf, hand_frames)))
         return parse_reach_request(
             req, frames=self._frame_lookup(q_urdf), hand_positions=hand_positions,
-            joint_names=self._names, config=self.params.get(ReachRequestConfig), scene=self._scene)
+            joint_names=self._names, config=self.params.get(ReachRequestConfig), scene=self._scene,
+            hand_frames=dict(zip(HANDS, hand_frames)))
 
     def _urdf_q(self, q: np.ndarray) -> np.ndarray:
         """The URDF model's configuration of the planner's configuration ``q``."""
@@ -322,7 +352,8 @@ class PmpPlannerNode(Node):
             if start is None:
                 raise InvalidInput("no /joint_states received: the robot's posture is "
                                    "unknown, nothing can be executed")
-            parsed = self._goal_of(req, dict(start))
+            start, held_note = self._held_start(req, dict(start))
+            parsed = self._goal_of(req, start)
             goal = parsed.goal
             arrival = arrival_config(self.params.get(ArrivalConfig), req.arrival_tolerance)
             plan = self.planner.plan(goal, start)
@@ -350,7 +381,7 @@ class PmpPlannerNode(Node):
         res.execution_time = float(out.execution_time)
         return finish(out.outcome, f"{out.message} (planned: residuals "
                       + ", ".join(f"{h} {plan.residuals[h] * 1e3:.2f} mm" for h in plan.hands)
-                      + f"{slowed})")
+                      + f"{slowed}){held_note}")
 
 
 def _final_targets(goal: ReachGoal) -> dict[str, np.ndarray]:

@@ -48,11 +48,13 @@ class JointStateCache:
     Malformed samples are skipped (the previous good one stays) and reported through
     ``on_error`` (default: a throttled warning of ``node``). With ``history`` > 0 the last
     ``history`` seconds of samples (by stamp) are kept too, for :meth:`at`: the posture at the
-    time of another sensor's data (a camera image).
+    time of another sensor's data (a camera image). ``suffix`` names the helper node
+    (``<node>_<suffix>``): a node with two caches gives each its own.
     """
 
     def __init__(self, node: Node, topic: str = "/joint_states",
-                 on_error: Callable[[str], None] | None = None, history: float = 0.0):
+                 on_error: Callable[[str], None] | None = None, history: float = 0.0,
+                 suffix: str = "joint_states"):
         self._on_error = on_error or (lambda text: node.get_logger().warning(
             text, throttle_duration_sec=5.0))
         self._reader = RawJointStateReader()
@@ -65,7 +67,7 @@ class JointStateCache:
         self._history_ns = int(history * 1e9)
         self._stamps: deque[int] = deque()
         self._samples: deque[bytes] = deque()
-        self.node = Node(f"{node.get_name()}_joint_states", namespace=node.get_namespace(),
+        self.node = Node(f"{node.get_name()}_{suffix}", namespace=node.get_namespace(),
                          context=node.context, use_global_arguments=False)
         self.node.create_subscription(JointState, topic, self._on_data,
                                       qos_profile_sensor_data, raw=True)

@@ -228,6 +228,7 @@ def parse_reach_request(
     joint_names: Collection[str],
     config: ReachRequestConfig,
     scene: Sequence = (),
+    hand_frames: Mapping[str, str] | None = None,
 ) -> ParsedReach:
     """Validate a Reach request (service or action goal) and build its :class:`ReachGoal`.
 
@@ -238,6 +239,8 @@ def parse_reach_request(
         joint_names: the joints of the body model (frozen, scaled, torque-limited joints).
         config: defaults of the request fields.
         scene: obstacle messages from /pmp/obstacles, merged with the request's.
+        hand_frames: hand -> its frame; with hold_object and use_orientation each grasping
+            hand keeps its start orientation (the frame's at the start posture).
 
     Raises:
         InvalidInput: a message naming the field, the value and what was expected.
@@ -259,6 +262,11 @@ def parse_reach_request(
     orientations: dict[str, np.ndarray] = {}
     if req.hold_object:
         held = _held_object(req, hands, frames, hand_positions, config)
+        if req.use_orientation:  # a rigid grasp in translation: the hands do not turn
+            if hand_frames is None:
+                raise InvalidInput("use_orientation with hold_object: the hands' frames are "
+                                   "not known here")
+            orientations = {h: frames(hand_frames[h]).rotation for h in held.hands}
     else:
         for h in hands:
             pos, rot = _pose(f"{h}_target", getattr(req, f"{h}_target"), frames)
