@@ -155,7 +155,7 @@ def write_report(out_dir: Path, bag_dir: Path, results: list[Any],
         pr = ", ".join(f"{h} {v * 1e3:.2f}" for h, v in r.planned_residual.items()) or "-"
         ph = ", ".join(f"{h} {v * 1e3:.1f}" for h, v in r.physics_residual.items()) or "-"
         ex = ", ".join(f"{k} {v:.3f}" for k, v in r.extra.items()) or "-"
-        lines.append(f"| {r.name} | {'ok' if r.success else 'FAILED: ' + r.message} | {pr} | "
+        lines.append(f"| {r.name} | {_status(r)} | {pr} | "
                      f"{ph} | {ex} | {r.sim_end - r.sim_start:.2f} | {r.wall_s:.1f} |")
     lines += ["", f"Replay: {replay.get('message', '-')}", ""]
     if series is not None:
@@ -165,3 +165,12 @@ def write_report(out_dir: Path, bag_dir: Path, results: list[Any],
     path = out_dir / "report.md"
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def _status(r: Any) -> str:
+    """A phase's outcome for the report table (a provisional phase's failure says so)."""
+    if r.success:
+        return "ok"
+    if getattr(r, "required", True):
+        return f"FAILED: {r.message}"
+    return f"NOT MET (judged, not yet failing the demo: issue 20): {r.message}"
