@@ -116,18 +116,21 @@ class PinkSolver:
 
 
 def run_methods(model, targets, methods, orientation_modes=(False, True)):
-    """{method: {mode: arrays of pos err, ori err, time, joint-limit viol, tendon viol, torso}}"""
+    """{method: {mode: arrays of pos err, ori err, time, joint-limit viol, tendon viol, torso}}
+
+    The methods are interleaved target by target (every method solves a target before the next
+    target), so a change of the machine's load during the run falls on all of them alike."""
     chain = KinematicChain.from_name(CHAIN)
     alc = ArmLinearConstraints("right")
     idx = model.indices(chain.joints)
     lo, hi = model.lower[idx], model.upper[idx]
     rest = model.posture("rest")
-    out = {}
-    for name, (fn, subset) in methods.items():
-        out[name] = {}
-        for ori in orientation_modes:
-            rows = []
-            for T in targets[:subset]:
+    rows: dict[tuple[str, bool], list] = {(n, o): [] for n in methods for o in orientation_modes}
+    for ori in orientation_modes:
+        for k, T in enumerate(targets):
+            for name, (fn, subset) in methods.items():
+                if k >= subset:
+                    continue
                 c0 = time.process_time()
                 t0 = time.perf_counter()
                 q = fn(T, ori)
@@ -136,7 +139,7 @@ def run_methods(model, targets, methods, orientation_modes=(False, True)):
                 qf = rest.copy()
                 qf[idx] = q
                 M = model.frame_pose(qf, chain.frame)
-                rows.append((
+                rows[(name, ori)].append((
                     np.linalg.norm(M.translation - T.translation),
                     rotation_angle(T.rotation, M.rotation),
                     dt,
@@ -145,8 +148,8 @@ def run_methods(model, targets, methods, orientation_modes=(False, True)):
                     float(np.abs(q[:3]).max()),
                     dc,
                 ))
-            out[name]["pose" if ori else "pos"] = np.array(rows)
-    return out
+    return {name: {("pose" if o else "pos"): np.array(rows[(name, o)])
+                   for o in orientation_modes} for name in methods}
 
 
 def summarise(res):
