@@ -212,3 +212,26 @@ def test_cores_do_not_import_ros():
     assert out.returncode == 0, out.stderr
     assert "ROS_MODULES []" in out.stdout, out.stdout
     assert icub_pmp.__version__
+
+
+def test_reserve_domain_id_lets_the_callers_errors_through():
+    """An OSError raised inside ``reserve_domain_id`` (a TimeoutError: a node that did not
+    answer) reaches the caller as itself, not as domain_coordinator's "generator didn't stop
+    after throw()"; the domain is free again afterwards, and two reservations differ."""
+    import socket
+
+    import pytest
+    from domain_coordinator.impl import PORT_BASE
+
+    from icub_pmp.graph import reserve_domain_id
+
+    with pytest.raises(TimeoutError, match="no answer"):
+        with reserve_domain_id() as did:
+            raise TimeoutError("no answer")
+    probe = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        probe.bind(("", PORT_BASE + did))  # released
+    finally:
+        probe.close()
+    with reserve_domain_id() as a, reserve_domain_id() as b:
+        assert a != b and 1 <= a <= 100 and 1 <= b <= 100

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import os
 import random
+import socket
 from typing import Iterator
 
 __all__ = ["reserve_domain_id", "ros_environment"]
@@ -15,23 +16,31 @@ __all__ = ["reserve_domain_id", "ros_environment"]
 def reserve_domain_id() -> Iterator[int]:
     """Reserve a ROS_DOMAIN_ID in 1..100 not used by another test process on this machine.
 
-    Uses ``domain_coordinator`` (a lock port per domain), starting at a random id so parallel
-    sessions spread out. The id is free again when the context exits.
+    The lock of ``domain_coordinator`` (the ros2 test tool): a TCP port ``PORT_BASE + id``
+    bound for as long as the domain is in use, starting at a random id so parallel sessions
+    spread out. The id is free again when the context exits. Written here rather than through
+    ``domain_coordinator.domain_id``: that generator catches ``OSError`` around its ``yield``,
+    so a ``TimeoutError`` (an ``OSError``) raised by the caller's code was swallowed and came
+    out as "generator didn't stop after throw()", hiding the real reason.
     """
-    from domain_coordinator import domain_id
+    from domain_coordinator.impl import PORT_BASE
 
     start = random.randrange(100)
-
-    class _Selector:
-        def __init__(self) -> None:
-            self.value = start
-
-        def __call__(self) -> int:
-            self.value += 1
-            return self.value % 100 + 1
-
-    with domain_id(_Selector()) as did:
-        yield did
+    for k in range(100):
+        did = (start + k + 1) % 100 + 1
+        lock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            lock.bind(("", PORT_BASE + did))
+        except OSError:  # taken by another process
+            lock.close()
+            continue
+        try:
+            yield did
+        finally:
+            lock.close()
+        return
+    raise RuntimeError("no free ROS_DOMAIN_ID in 1..100 (every domain_coordinator lock port "
+                       "is taken)")
 
 
 def ros_environment(domain_id: int, base: dict[str, str] | None = None) -> dict[str, str]:
