@@ -180,3 +180,12 @@ def test_reward_fields_send_each_arm_to_its_own_side_first(results):
     by = {m.quantity: m for m in r.measured}
     assert by["fewest possible rounds / rounds [-]"].mean >= 0.99
     assert by["sequences with the own side first [fraction]"].mean >= 0.9
+
+
+def test_rfrr_is_compared_with_a_library_gp(results):
+    """Figs 6-7 carry a library baseline beside KRR: scikit-learn's GP with marginal-likelihood
+    hyperparameters, whose test nMSE is finite and better than predicting the mean (< 1)."""
+    r = results["force_fig6_7_rfrr_vs_krr"]
+    gp = [m for m in r.measured if m.quantity.startswith("scikit-learn GP nMSE")]
+    assert len(gp) == 1 and 0.0 <= gp[0].mean < 1.0, gp
+    assert "scikit-learn GP" in r.verdict
