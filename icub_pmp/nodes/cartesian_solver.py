@@ -73,6 +73,7 @@ from icub_pmp.ros.joint_state_cache import JointStateCache, MeasuredState
 from icub_pmp.ros.node_runner import run_node
 from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.subscriber_wait import subscriber_note, wait_for_subscribers
+from icub_pmp.ros.trajectory_action_server import FIRST_STATE_TIMEOUT
 
 __all__ = ["CartesianSolverNode", "main"]
 
@@ -153,7 +154,10 @@ class CartesianSolverNode(Node):
 
     def _start_q(self, start_state: JointState) -> np.ndarray:
         """Full configuration (nq,) from the request's start_state or the latest joints."""
-        return self.controller.start_configuration(self._latest, self._start_state(start_state))
+        given = self._start_state(start_state)
+        if given is None:
+            self.joint_cache.wait_for_first(FIRST_STATE_TIMEOUT)  # a request right after start-up
+        return self.controller.start_configuration(self._latest, given)
 
     @staticmethod
     def _start_state(start_state: JointState) -> dict[str, float] | None:
@@ -268,6 +272,7 @@ class CartesianSolverNode(Node):
 
         feedback("solving", {}, float(req.trajectory_time), 0.0)
         try:
+            self.joint_cache.wait_for_first(FIRST_STATE_TIMEOUT)  # a goal right after start-up
             if self.joint_cache.latest() is None:
                 raise InvalidInput("no /joint_states received: the robot's posture is "
                                    "unknown, nothing can be executed")
