@@ -173,6 +173,15 @@ def test_external_wrench_and_contact_over_dds(graph, probe):
     sub = probe.node.create_subscription(Bool, "/wrench_estimator/contact/left_hand",
                                          lambda m: contact.append(m.data),
                                          qos_profile_sensor_data)
+    # as a user does before pushing (wholeBodyDynamics' calib): the estimator calibrated on
+    # the still, free arm; otherwise its start-up calibration could find its still window
+    # under the push (the earlier tests moved the arm) and take the push for an offset
+    for _ in range(20):
+        _wait_sim(probe, graph, 0.6)
+        cal = probe.call("/wrench_estimator/calibrate", Trigger, Trigger.Request(), timeout=60.0)
+        if cal.success:
+            break
+    assert cal.success, cal.message
     req = ApplyWrench.Request(target="l_hand_dh_frame", duration=2.0)
     req.wrench = Wrench()
     req.wrench.force.y, req.wrench.force.z = -1.5, 2.6

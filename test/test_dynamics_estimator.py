@@ -202,3 +202,28 @@ def test_startup_calibration_leaves_out_the_filters_start(truth, model):
     for h in ft:
         np.testing.assert_allclose(est.offsets[h], offset[h], atol=1e-3)
         assert np.linalg.norm(e.ext_hand[h][:3]) < 1e-3
+
+
+def test_startup_calibration_is_not_made_late(truth, model):
+    """calibrate_at_startup only within ``calibrate_at_startup_within`` of the start: an arm
+    that moves all that time and then stands still under a 3 N push is NOT calibrated on the
+    push (the push would become the offset and the estimate zero); the estimator says why and
+    the push is estimated. A ~/calibrate (calibrate_from_recent) still works afterwards."""
+    est = _est(calibrate_at_startup=True, calibration_samples=200,
+               calibrate_at_startup_within=1.0)
+    rng = np.random.default_rng(3)
+    q0 = model.random_q(rng)
+    for k in range(1000):  # 1 s of motion: never still
+        q = q0 + 0.05 * np.sin(2 * np.pi * 2.0 * 0.001 * k)
+        est.update(0.001 * k, q, None, truth.rnea(q).sensor)
+    assert not est.calibrated and est.startup_calibration_expired
+    assert "~/calibrate" in est.calibration_error
+    # now still, with an external 3 N force on the left hand: what the FT sensors see
+    f = np.array([0.0, -1.5, 2.6])
+    ft = truth.rnea(q0, hand_wrenches={"left": np.r_[f, 0.0, 0.0, 0.0]}).sensor
+    for k in range(1000, 2000):
+        e = est.update(0.001 * k, q0, None, ft)
+    assert not est.calibrated
+    assert np.linalg.norm(e.ext_hand["left"][:3] - f) < 0.05 * np.linalg.norm(f)
+    est.calibrate_from_recent()  # the user's ~/calibrate (here, wrongly, under the push)
+    assert est.calibrated

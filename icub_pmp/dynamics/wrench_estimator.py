@@ -126,6 +126,7 @@ class WrenchEstimator:
             tuple(self.joint_names))
         self.calibrated = False  # offsets from a calibration (not the start-up average)
         self._startup_window_skipped = False  # calibrate_at_startup (calibrate_offsets)
+        self._startup_samples = 0  # samples since calibrate_offsets (calibrate_at_startup)
         self.calibration_error: str = ""  # why the last start-up attempt was refused
         self._residual = np.zeros((len(HANDS), 6))
 
@@ -171,6 +172,14 @@ class WrenchEstimator:
         # calibrate_at_startup skips the first full window: the FT low-passes start on the
         # first sample, which in the node graph can be one of before the physics loop ran
         self._startup_window_skipped = False
+        self._startup_samples = 0
+
+    @property
+    def startup_calibration_expired(self) -> bool:
+        """True once ``calibrate_at_startup_within`` seconds of samples passed since the start
+        (or :meth:`calibrate_offsets`) without a start-up calibration: it is not tried again."""
+        return self._startup_samples >= self.config.calibrate_at_startup_within \
+            * self.config.sample_rate_hz
 
     def calibrate_from_recent(self) -> FtOffsets:
         """Set the FT offsets to the mean residual (measured - predicted) of the last
@@ -303,7 +312,16 @@ class WrenchEstimator:
         for k, h in enumerate(HANDS):
             r[k] = x[h] - p[h]
         self.calibration.add(q, r)
-        if cfg.calibrate_at_startup and not self.calibrated and self.calibration.full:
+        startup = cfg.calibrate_at_startup and not self.calibrated
+        if startup and not self.startup_calibration_expired:
+            self._startup_samples += 1
+            if self.startup_calibration_expired:  # no still window at start-up: never later,
+                # when a still arm may be a pushed one whose push would become the offset
+                self.calibration_error = (
+                    f"start-up calibration gave up: no still, free window of "
+                    f"{cfg.calibration_samples} samples within {cfg.calibrate_at_startup_within:g}"
+                    f" s of the start; call ~/calibrate with the robot still and free")
+        if startup and self.calibration.full and not self.startup_calibration_expired:
             if not self._startup_window_skipped:  # the filters' start (calibrate_offsets)
                 self._startup_window_skipped = True
                 self.calibration.clear()

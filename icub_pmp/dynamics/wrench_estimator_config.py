@@ -33,6 +33,7 @@ class WrenchEstimatorConfig(ConfigBase):
     calibration_samples: int = 500  # FT offset calibration (~/calibrate): the last N samples
     calibration_motion_tolerance: float = 0.01  # joint spread over them that refuses it [rad]
     calibrate_at_startup: bool = False  # calibrate once the first still N samples are in
+    calibrate_at_startup_within: float = 10.0  # ... within this much time after the start [s]
     contact_force_on: float = 1.0  # external force norm that sets the contact flag [N]
     contact_force_off: float = 0.5  # external force norm that clears it [N]
     contact_min_samples: int = 5  # consecutive samples needed to switch the flag
@@ -87,6 +88,9 @@ class WrenchEstimatorConfig(ConfigBase):
                      "publish_every"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if not self.calibrate_at_startup_within > 0:
+            raise ConfigError("calibrate_at_startup_within must be > 0 s, got "
+                              f"{self.calibrate_at_startup_within}")
         if self.calibration_samples < 1:
             raise ConfigError(f"calibration_samples must be >= 1, got {self.calibration_samples}")
         if not self.calibration_motion_tolerance > 0:

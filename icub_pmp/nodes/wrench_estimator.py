@@ -15,7 +15,9 @@ services   ~/calibrate (std_srvs/Trigger): FT offset calibration from the last
            ``calibration_samples`` samples, which must be still and contact-free (as
            wholeBodyDynamics's ``calib``): success with the offsets, or success=false and the
            reason (the robot moved, too few samples) with the offsets unchanged;
-           ``calibrate_at_startup`` does it once by itself as soon as a still window is in
+           ``calibrate_at_startup`` does it once by itself as soon as a still window is in,
+           within ``calibrate_at_startup_within`` s of the start (never later: a still arm
+           then may be a pushed one; an error in the log says to call ~/calibrate)
 
 Time: the estimator works on message stamps only (no clock, ``use_sim_time`` not needed: it
 saves deserialising /clock at 1 kHz). Synchronisation: with ``require_same_stamp`` (lockstep
@@ -195,7 +197,10 @@ class WrenchEstimatorNode(Node):
                 np.array([off[h] for h in HANDS]), est.config.calibration_samples, 0.0))
         elif est.calibration_error and self._calibration_said != est.calibration_error:
             self._calibration_said = est.calibration_error
-            self.warn("calibration", f"start-up calibration waits: {est.calibration_error}")
+            if est.startup_calibration_expired:
+                self.get_logger().error(est.calibration_error)
+            else:
+                self.warn("calibration", f"start-up calibration waits: {est.calibration_error}")
 
     # ------------------------------------------------------------------ inputs
     def _warn(self, kind: str, text: str) -> None:
