@@ -128,15 +128,21 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
 
     from icub_interfaces.msg import ControllerStatus
     from icub_pmp.ros.qos import LATCHED_QOS
-    from icub_pmp.testing import NodeGraph, RosProbe, reserve_domain_id, ros_environment
+    from icub_pmp.testing import (
+        NodeGraph,
+        RosProbe,
+        reserve_domain_id,
+        ros_environment,
+        with_realism,
+    )
 
-    params = {
+    params = with_realism(preset, {
         "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10,
-                       "ground_truth_decimation": 10, "realism.preset": preset},
+                       "ground_truth_decimation": 10},
         "wrench_estimator": {"publish_every": 10,
                              "sample_every": sample_every or 1},
         "impedance_controller": {"use_sim_time": True},
-    }
+    })
     nodes = ["sim_bridge", "impedance_controller"]
     if sample_every is not None:
         nodes.insert(1, "wrench_estimator")

@@ -28,6 +28,7 @@ from icub_pmp.testing import (
     repo_root,
     reserve_domain_id,
     ros_environment,
+    with_realism,
 )
 
 NODES = ["sim_bridge", "wrench_estimator", "impedance_controller"]
@@ -67,11 +68,13 @@ class _Recorder:
 @pytest.fixture(scope="module")
 def graph(ros_domain_id):
     env = ros_environment(ros_domain_id)
-    params = {
+    # the ideal simulator: these tests check the loop and the estimator against exact
+    # sensors and model (test_control_realism.py and test_dynamics_calibration_node.py: icub)
+    params = with_realism("ideal", {
         "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10},
         "wrench_estimator": {},
         "impedance_controller": {"use_sim_time": True},
-    }
+    })
     with NodeGraph(NODES, params, env=env) as g:
         yield g
 

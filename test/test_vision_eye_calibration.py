@@ -166,7 +166,7 @@ def test_shipped_icub_calibration_matches_the_icub_cameras(icub_scene):
     views triangulate within 3 mm (median) through it, closer than through the nominal model.
     Fails when the preset's camera draws change without a new calibration."""
     from icub_pmp.config import repo_root
-    from icub_pmp.demo.scenario import ICUB_EYE_CALIBRATION
+    from icub_pmp.graph import ICUB_EYE_CALIBRATION
     from icub_sim_bridge.harness.marker_views import rendered_marker_observations
 
     calib = EyeCalibration.load(repo_root() / ICUB_EYE_CALIBRATION)

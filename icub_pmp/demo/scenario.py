@@ -54,7 +54,13 @@ from typing import Callable
 import numpy as np
 
 from icub_pmp.config import repo_root
-from icub_pmp.graph import NodeGraph, NodeProcess, reserve_domain_id, ros_environment
+from icub_pmp.graph import (
+    NodeGraph,
+    NodeProcess,
+    realism_parameters,
+    reserve_domain_id,
+    ros_environment,
+)
 from icub_pmp.kinematics import IcubModel
 from icub_pmp.ros.conversions import arrays_to_trajectory, time_to_sec
 from icub_pmp.ros.probe import RosProbe
@@ -72,8 +78,6 @@ GRAPH = [
     "robot_state_publisher",
 ]
 
-#: the eye calibration of the ``icub`` realism preset's robot (seed 0), relative to the repository
-ICUB_EYE_CALIBRATION = "config/eye_calibration/icub_seed0.yaml"
 
 #: judging of the vision reach against the object's ground truth [m]
 VISION_ARRIVAL_TOLERANCE = 0.02
@@ -941,21 +945,18 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
 
 def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]:
     """The demo's node parameters over their config files: the simulator in lockstep with the
-    controller, every other node on simulated time; ``realism`` overrides the simulator's
-    ``realism.preset`` (None = config/sim_bridge.yaml's); with ``icub`` the controller
-    compensates the joint friction (``friction_compensation``)."""
-    sim: dict[str, object] = {"mode": "lockstep", "use_sim_time": False}
+    controller, every other node on simulated time; ``realism`` sets the simulator's
+    ``realism.preset`` and what goes with it (:func:`~icub_pmp.graph.realism_parameters`:
+    the controller's friction compensation, the segmenter's eye calibration); None = the
+    shipped config files' (``icub``)."""
+    preset = realism_parameters(realism) if realism is not None else {}
+    sim: dict[str, object] = {"mode": "lockstep", "use_sim_time": False,
+                              **preset.get("sim_bridge", {})}
     # stiff position tracking for the reaches (the compliant mode is the controller's
     # default; config/impedance_controller.yaml)
-    controller: dict[str, object] = {"lockstep": True, "use_sim_time": True, "mode": "position"}
-    if realism is not None:
-        sim["realism.preset"] = realism
-    segmenter: dict[str, object] = {"use_sim_time": True}
-    if realism == "icub":  # the robot's joint friction, added back by the torque loop
-        controller["friction_compensation"] = True
-        # the preset's cameras differ from camera_info: this robot's eye calibration
-        # (icub calibrate-eyes; docs/decisions/0057)
-        segmenter["eye_calibration_file"] = ICUB_EYE_CALIBRATION
+    controller: dict[str, object] = {"lockstep": True, "use_sim_time": True, "mode": "position",
+                                     **preset.get("impedance_controller", {})}
+    segmenter: dict[str, object] = {"use_sim_time": True, **preset.get("motion_segmenter", {})}
     return {
         "sim_bridge": sim,
         "impedance_controller": controller,

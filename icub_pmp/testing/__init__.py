@@ -13,7 +13,13 @@ what only tests and benchmarks use: :mod:`.bag_traffic` (the graph's traffic at 
 """
 
 from icub_pmp.config import repo_root
-from icub_pmp.graph import NodeGraph, NodeProcess, reserve_domain_id, ros_environment
+from icub_pmp.graph import (
+    NodeGraph,
+    NodeProcess,
+    reserve_domain_id,
+    ros_environment,
+    with_realism,
+)
 from icub_pmp.ros.probe import RosProbe
 from icub_pmp.testing.icub_cli import run_icub
 
@@ -25,4 +31,5 @@ __all__ = [
     "ros_environment",
     "repo_root",
     "run_icub",
+    "with_realism",
 ]
