@@ -12,12 +12,23 @@ arm to the ``park`` posture's hand position by PMP. Judged on the ground-truth t
 (``/ground_truth/self_contacts``, ``/ground_truth/object_contacts``, the cubes' poses); time
 is ``/clock``. :func:`execute_over_dds` is the phase a demo can call with its
 :class:`~icub_pmp.demo.scenario.DemoRunner`.
+
+Where the cubes are: the iCub has no object perception in this graph, so every grasp and
+carry is aimed from the cube's pose on the simulator's ``/ground_truth/objects/<cube>`` topic
+at that moment (not where the plan put it: a hand-over's cube lands a few cm off its spot,
+and the palm pushes a cube before it grasps it). Before each round the jobs are re-aimed at
+the measured cubes and the pair is checked again from the arms' measured postures (the
+first phase from ``/joint_states``, each next one from where the previous imagined pair
+ended): the round runs in parallel or in series as that check says, whatever the plan said.
+A refused grasp (the palm not touching the cube) is tried once more, aimed at the measured
+cube a little lower.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import tempfile
 import time
@@ -34,32 +45,45 @@ from icub_pmp.peripersonal.tabletop_task import (
     TaskPlan,
 )
 
-__all__ = ["ServicePairCheck", "execute_over_dds", "main"]
+__all__ = ["ServicePairCheck", "execute_over_dds", "graph_parameters", "main"]
 
 GRAPH = ["sim_bridge", "impedance_controller", "pmp_planner", "peripersonal_space"]
-_PHASES = 4
+#: a refused grasp is tried again with the hand aimed this much lower onto the cube [m]
+GRASP_RETRY_LOWER = 0.01
 
 
 class ServicePairCheck:
     """:data:`~icub_pmp.peripersonal.tabletop_task.PairCheck` through
-    ``/peripersonal/plan_pair``: each phase's pair of hand targets, imagined from the rest
-    posture; a collision in any phase serialises the pair."""
+    ``/peripersonal/plan_pair``: the pairs of hand targets of the two jobs' phases imagined one
+    after the other, the first from the arms' measured posture (``from_current``), each next
+    from the posture where the previous pair ended (the answer's ``final``); a collision in
+    any phase serialises the pair. ``messages``: the last call's answers, one per phase."""
 
-    def __init__(self, probe: object, config: TabletopTaskConfig | None = None):
+    def __init__(self, probe: object, config: TabletopTaskConfig | None = None,
+                 from_current: bool = True):
         self.probe, self.config = probe, config or TabletopTaskConfig()
+        self.from_current = from_current
+        self.messages: list[str] = []
 
     def __call__(self, left: Job, right: Job) -> bool:
         from icub_interfaces.srv import PlanPair
 
+        self.messages = []
+        start = None
         for wl, wr in zip(left.waypoints(self.config), right.waypoints(self.config)):
             req = PlanPair.Request()
             req.left_target.x, req.left_target.y, req.left_target.z = (float(v) for v in wl)
             req.right_target.x, req.right_target.y, req.right_target.z = (float(v) for v in wr)
+            req.from_current = self.from_current
+            if start is not None:
+                req.start = start
             res = self.probe.call("/peripersonal/plan_pair", PlanPair, req, 120.0)
             if not res.success:
                 raise RuntimeError(f"/peripersonal/plan_pair: {res.message}")
+            self.messages.append(res.message)
             if res.collides:
                 return True
+            start = res.final
         return False
 
 
@@ -126,20 +150,31 @@ def _grasp(runner: object, obj: str, hand: str, attach: bool) -> tuple[bool, str
     return res.success, res.message
 
 
+def _measured_jobs(runner: object, jobs: dict[str, Job]) -> dict[str, Job]:
+    """The jobs with each cube's pick point where the cube is now (its ground-truth pose)."""
+    return {a: j._replace(pick=runner.object_position(j.object)) for a, j in jobs.items()}
+
+
 def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
                      config: TabletopTaskConfig | None = None, all_serial: bool = False,
                      frozen: tuple[str, ...] = (), tau: float = 2.0,
-                     contacts: _Contacts | None = None) -> dict:
+                     contacts: _Contacts | None = None,
+                     pair_check: ServicePairCheck | None = None) -> dict:
     """Execute ``plan`` through the running graph (module doc) with ``runner`` (a
     :class:`~icub_pmp.demo.scenario.DemoRunner`); returns the report as
-    :meth:`TaskReport.as_dict` has it."""
+    :meth:`TaskReport.as_dict` has it, with ``replans`` (rounds whose mode the check from the
+    measured postures changed) and ``grasp_retries``. ``pair_check``: the check of each
+    round's pair before it runs (default :class:`ServicePairCheck`); not used when
+    ``all_serial``."""
     from geometry_msgs.msg import PoseStamped
     from rclpy.qos import qos_profile_sensor_data
 
     from icub_interfaces.srv import ResetSim
+    from icub_sim_bridge.harness.tabletop_execution import AREA_RADIUS
 
     cfg = config or TabletopTaskConfig()
     contacts = contacts or _Contacts(runner.probe)
+    check = pair_check or ServicePairCheck(runner.probe, cfg)
     for name in scene.objects:  # the cubes' true poses (DemoRunner keeps box and cylinder)
         if name not in runner.latest:
             runner._subs.append(runner.probe.node.create_subscription(
@@ -154,49 +189,81 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
     for name, pos in scene.objects.items():
         runner.set_object(name, np.array(pos))
     runner.wait_sim(0.3)
+    if not runner.probe.wait_for(lambda: all(n in runner.latest for n in scene.objects), 60.0):
+        raise TimeoutError(f"no ground-truth pose of the cubes {list(scene.objects)} after 60 s "
+                           "(are they sim_bridge's tabletop_objects?)")
     model = runner.model
     park_hand = {h: model.frame_position(model.q_from_dict(model.spec.posture("park")),
                                          model.spec.hand_frame(h)) for h in HANDS}
+    up = np.array([0.0, 0.0, 1.0])
     contacts.reset()
     t0 = runner.sim_time()
     refusals: list[str] = []
+    retries: list[str] = []
     modes: list[str] = []
+    replans: list[str] = []
     goals: list[str] = []
 
     def reach(targets: dict[str, np.ndarray], what: str) -> None:
         goals.append(f"{what} {sorted(targets)}: {_reach(runner, targets, frozen, tau)}")
 
+    def grasp(jobs: dict[str, Job], arms: list[str], held: set[str]) -> list[str]:
+        """Grasp with ``arms``; returns the refused ones (their messages kept)."""
+        failed = []
+        for a in arms:
+            ok, msg = _grasp(runner, jobs[a].object, a, True)
+            if ok:
+                held.add(a)
+            else:
+                failed.append(a)
+                refusals.append(msg)
+        return failed
+
     def phases(jobs: dict[str, Job]) -> None:
-        way = {a: list(j.waypoints(cfg)) for a, j in jobs.items()}
+        jobs = _measured_jobs(runner, jobs)
         held: set[str] = set()
         for a, j in jobs.items():
             contacts.busy[a] = j.object
-        for phase in range(_PHASES):
-            arms = [a for a in jobs if phase == 0 or a in held]
-            if not arms:
-                break
-            reach({a: way[a][phase] for a in arms}, f"phase {phase}")
-            if phase == 0:
-                hands = runner.hand_positions()
-                for a, j in jobs.items():
-                    ok, msg = _grasp(runner, j.object, a, True)
-                    if not ok:
-                        refusals.append(msg)
-                        continue
-                    held.add(a)
-                    way[a][2] = j.place + (hands[a] - j.pick) + [0.0, 0.0, cfg.drop_height]
-                    way[a][3] = way[a][2] + [0.0, 0.0, cfg.retreat_height - cfg.place_height]
-            elif phase == 2:
-                for a in held:
-                    _grasp(runner, jobs[a].object, a, False)
-                runner.wait_sim(0.3)
+        reach({a: j.pick + cfg.grasp_height * up for a, j in jobs.items()}, "onto the cube")
+        failed = grasp(jobs, list(jobs), held)
+        if failed:  # once more, aimed at the cube where it is now, a little lower
+            jobs.update(_measured_jobs(runner, {a: jobs[a] for a in failed}))
+            reach({a: jobs[a].pick + (cfg.grasp_height - GRASP_RETRY_LOWER) * up
+                   for a in failed}, "grasp retry")
+            retries.extend(f"{a}:{jobs[a].object}" for a in failed)
+            grasp(jobs, failed, held)
+        if held:
+            hands = runner.hand_positions()
+            way = {}
+            for a in held:
+                # carry the cube's centre (not the hand) above its place: the hand-to-cube
+                # offset of this grasp, both measured
+                offset = hands[a] - runner.object_position(jobs[a].object)
+                carry = jobs[a].place + offset + cfg.drop_height * up
+                way[a] = (hands[a] + (cfg.lift_height - cfg.grasp_height) * up, carry,
+                          carry + (cfg.retreat_height - cfg.place_height) * up)
+            reach({a: w[0] for a, w in way.items()}, "lift")
+            reach({a: w[1] for a, w in way.items()}, "above the place")
+            for a in held:
+                _grasp(runner, jobs[a].object, a, False)
+            runner.wait_sim(0.3)
+            reach({a: w[2] for a, w in way.items()}, "retreat")
         for a in jobs:
             contacts.busy.pop(a, None)
 
-    for rnd in plan.rounds:
-        mode = "serial" if (all_serial and rnd.mode == "parallel") else rnd.mode
-        modes.append(mode)
+    for k, rnd in enumerate(plan.rounds):
         jobs = {a: j for a, j in rnd.jobs.items() if j is not None}
+        mode = rnd.mode
+        if all_serial and mode == "parallel":
+            mode = "serial"
+        elif len(jobs) == 2 and not all_serial:
+            # the pair again, from where the arms and the cubes are now
+            m = _measured_jobs(runner, jobs)
+            mode = "serial" if check(m["left"], m["right"]) else "parallel"
+            if mode != rnd.mode:
+                replans.append(f"round {k + 1}: {rnd.mode} -> {mode} "
+                               f"({'; '.join(check.messages)})")
+        modes.append(mode)
         if mode == "parallel":
             phases(jobs)
             continue
@@ -213,7 +280,7 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
             continue
         p = runner.object_position(name)
         c = places[name]
-        if np.hypot(*(p[:2] - c[:2])) <= 0.05 and abs(p[2] - c[2]) < 0.01:
+        if np.hypot(*(p[:2] - c[:2])) <= AREA_RADIUS and abs(p[2] - c[2]) < 0.01:
             delivered.append(name)
     handovers = sum(1 for j in plan.jobs() if j.kind == "handover" and j.object in delivered)
     success = (len(delivered) == len(scene.objects) and contacts.arm_arm == 0
@@ -221,10 +288,40 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
     return {"delivered": delivered, "objects": len(scene.objects),
             "duration": runner.sim_time() - t0, "arm_arm_contacts": contacts.arm_arm,
             "arm_object_collisions": list(contacts.arm_object), "handovers": handovers,
-            "grasp_refusals": refusals, "rounds": modes, "goals": goals,
+            "grasp_refusals": refusals, "grasp_retries": retries, "rounds": modes,
+            "replans": replans, "goals": goals,
             "final_positions": {n: np.round(runner.object_position(n), 3).tolist()
                                 for n in scene.objects},
             "wall_time": time.perf_counter() - wall0, "success": success}
+
+
+def graph_parameters(scene: TabletopScene, maps_dir: Path) -> dict[str, dict[str, object]]:
+    """The task graph's node parameters (over their config files): the simulator in lockstep
+    with ``scene``'s cubes and no cameras, the others on simulated time, ``peripersonal_space``
+    on the maps in ``maps_dir``."""
+    spec = " ".join(f"{n}:{p[0]},{p[1]},{p[2]}" for n, p in scene.objects.items())
+    return {
+        "sim_bridge": {"mode": "lockstep", "use_sim_time": False, "cameras_enabled": False,
+                       "tabletop_objects": spec},
+        # the controller as the in-process harness runs it (the shipped impedance mode: the
+        # palm stops on the cube instead of pressing it into the table)
+        "impedance_controller": {"lockstep": True, "use_sim_time": True,
+                                 "wait_for_estimate": False},
+        # a pick-and-place needs the hand within a centimetre (wrists frozen, PMP ends a few
+        # mm short of some targets, which the planner would refuse at its 1 mm default)
+        "pmp_planner": {"use_sim_time": True, "success_tolerance": 0.01},
+        "peripersonal_space": {"use_sim_time": True, "maps_dir": str(maps_dir),
+                               "grow_if_missing": False},
+    }
+
+
+def _one_line(run: dict) -> str:
+    """A run's figures on one line."""
+    return (f"{len(run['delivered'])}/{run['objects']} delivered, {run['arm_arm_contacts']} "
+            f"arm-arm, {len(run['arm_object_collisions'])} arm-object, {run['handovers']} "
+            f"hand-over(s), {run['duration']:.1f} s simulated, {run['wall_time']:.0f} s wall, "
+            f"rounds {run['rounds']}, replans {len(run['replans'])}, grasp retries "
+            f"{run['grasp_retries']}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -238,41 +335,40 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--maps", type=Path, default=None)
     ap.add_argument("--serial", action="store_true", help="also the all-serial baseline")
+    ap.add_argument("--runs", type=int, default=1,
+                    help="scheduled runs in the same graph (each from a reset) [-]")
     args = ap.parse_args(argv)
+    if args.runs < 1:
+        ap.error(f"--runs: expected >= 1, got {args.runs}")
     space = _space(args.maps)
     maps_dir = Path(tempfile.mkdtemp(prefix="tabletop_maps_"))
     space.save(maps_dir)
-    spec = " ".join(f"{n}:{p[0]},{p[1]},{p[2]}" for n, p in SCENE.objects.items())
-    params = {
-        "sim_bridge": {"mode": "lockstep", "use_sim_time": False, "cameras_enabled": False,
-                       "tabletop_objects": spec},
-        # the controller as the in-process harness runs it (the shipped impedance mode: the
-        # palm stops on the cube instead of pressing it into the table)
-        "impedance_controller": {"lockstep": True, "use_sim_time": True,
-                                 "wait_for_estimate": False},
-        # a pick-and-place needs the hand within a centimetre (wrists frozen, PMP ends a few
-        # mm short of some targets, which the planner would refuse at its 1 mm default)
-        "pmp_planner": {"use_sim_time": True, "success_tolerance": 0.01},
-        "peripersonal_space": {"use_sim_time": True, "maps_dir": str(maps_dir),
-                               "grow_if_missing": False},
-    }
     out = args.out or Path("bags") / time.strftime("tabletop-dds-%Y%m%d-%H%M%S")
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
-        with NodeGraph(GRAPH, params, env=env) as graph:
+        with NodeGraph(GRAPH, graph_parameters(SCENE, maps_dir), env=env) as graph:
             probe = RosProbe(domain, "tabletop_driver")
             try:
                 runner = DemoRunner(probe)
                 runner.wait_ready(services=("/sim/set_object_pose",))
                 plan = TabletopPlanner(space, ServicePairCheck(probe)).plan(SCENE)
-                report = {"plan": plan_summary(plan), "over": "dds"}
-                report["scheduled"] = execute_over_dds(runner, SCENE, plan, frozen=WRISTS)
-                report["task_success"] = report["scheduled"]["success"]
+                report = {"plan": plan_summary(plan), "over": "dds",
+                          "load_average": list(os.getloadavg())}
+                runs = []
+                for k in range(args.runs):
+                    runs.append(execute_over_dds(runner, SCENE, plan, frozen=WRISTS))
+                    print(f"tabletop_dds: run {k + 1}: {_one_line(runs[-1])}", flush=True)
+                report["scheduled"] = runs[0]
+                report["runs"] = runs
+                report["task_success"] = all(r["success"] for r in runs)
                 if args.serial:
                     report["serial"] = execute_over_dds(runner, SCENE, plan, frozen=WRISTS,
                                                         all_serial=True)
+                    print(f"tabletop_dds: all-serial: {_one_line(report['serial'])}",
+                          flush=True)
                     report["task_speedup_vs_serial"] = (report["serial"]["duration"]
                                                         / report["scheduled"]["duration"])
+                report["load_average_end"] = list(os.getloadavg())
             except Exception as exc:
                 print(graph.outputs()[-6000:], file=sys.stderr)
                 print(f"tabletop_dds: {type(exc).__name__}: {exc}", file=sys.stderr)
