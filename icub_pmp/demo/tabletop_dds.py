@@ -45,7 +45,8 @@ from icub_pmp.peripersonal.tabletop_task import (
     TaskPlan,
 )
 
-__all__ = ["ServicePairCheck", "execute_over_dds", "graph_parameters", "main"]
+__all__ = ["ServicePairCheck", "execute_over_dds", "graph_parameters", "set_parameters",
+           "main"]
 
 GRAPH = ["sim_bridge", "impedance_controller", "pmp_planner", "peripersonal_space"]
 #: a refused grasp is tried again with the hand aimed this much lower onto the cube [m]
@@ -148,6 +149,26 @@ def _grasp(runner: object, obj: str, hand: str, attach: bool) -> tuple[bool, str
     req.object, req.hand, req.attach = obj, hand, attach
     res = runner.probe.call("/sim/grasp", Grasp, req, 60.0)
     return res.success, res.message
+
+
+def set_parameters(probe: object, node: str, values: dict[str, object]) -> dict[str, object]:
+    """Set ``values`` {name: value} on ``node`` (e.g. "/impedance_controller") through its
+    ``set_parameters`` service; returns the values they had (to put them back).
+    RuntimeError naming the parameter when the node refuses one."""
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    from rclpy.parameter import Parameter, parameter_value_to_python
+
+    names = list(values)
+    got = probe.call(f"{node}/get_parameters", GetParameters,
+                     GetParameters.Request(names=names), 60.0)
+    old = {n: parameter_value_to_python(v) for n, v in zip(names, got.values)}
+    req = SetParameters.Request(parameters=[Parameter(n, value=v).to_parameter_msg()
+                                            for n, v in values.items()])
+    res = probe.call(f"{node}/set_parameters", SetParameters, req, 60.0)
+    for n, r in zip(names, res.results):
+        if not r.successful:
+            raise RuntimeError(f"{node}: parameter {n} = {values[n]!r} refused: {r.reason}")
+    return old
 
 
 def _measured_jobs(runner: object, jobs: dict[str, Job]) -> dict[str, Job]:
@@ -337,32 +358,44 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--serial", action="store_true", help="also the all-serial baseline")
     ap.add_argument("--runs", type=int, default=1,
                     help="scheduled runs in the same graph (each from a reset) [-]")
+    ap.add_argument("--cubes", default="",
+                    help="comma-separated cubes of the scene to use (default all: "
+                         f"{','.join(SCENE.objects)})")
     args = ap.parse_args(argv)
     if args.runs < 1:
         ap.error(f"--runs: expected >= 1, got {args.runs}")
+    scene = SCENE
+    if args.cubes:
+        names = [n.strip() for n in args.cubes.split(",") if n.strip()]
+        unknown = [n for n in names if n not in SCENE.objects]
+        if unknown or not names:
+            ap.error(f"--cubes: unknown cube(s) {unknown or [args.cubes]}; valid: "
+                     f"{', '.join(SCENE.objects)}")
+        scene = TabletopScene({n: SCENE.objects[n] for n in names}, SCENE.areas,
+                              {n: SCENE.destinations[n] for n in names})
     space = _space(args.maps)
     maps_dir = Path(tempfile.mkdtemp(prefix="tabletop_maps_"))
     space.save(maps_dir)
     out = args.out or Path("bags") / time.strftime("tabletop-dds-%Y%m%d-%H%M%S")
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
-        with NodeGraph(GRAPH, graph_parameters(SCENE, maps_dir), env=env) as graph:
+        with NodeGraph(GRAPH, graph_parameters(scene, maps_dir), env=env) as graph:
             probe = RosProbe(domain, "tabletop_driver")
             try:
                 runner = DemoRunner(probe)
                 runner.wait_ready(services=("/sim/set_object_pose",))
-                plan = TabletopPlanner(space, ServicePairCheck(probe)).plan(SCENE)
+                plan = TabletopPlanner(space, ServicePairCheck(probe)).plan(scene)
                 report = {"plan": plan_summary(plan), "over": "dds",
                           "load_average": list(os.getloadavg())}
                 runs = []
                 for k in range(args.runs):
-                    runs.append(execute_over_dds(runner, SCENE, plan, frozen=WRISTS))
+                    runs.append(execute_over_dds(runner, scene, plan, frozen=WRISTS))
                     print(f"tabletop_dds: run {k + 1}: {_one_line(runs[-1])}", flush=True)
                 report["scheduled"] = runs[0]
                 report["runs"] = runs
                 report["task_success"] = all(r["success"] for r in runs)
                 if args.serial:
-                    report["serial"] = execute_over_dds(runner, SCENE, plan, frozen=WRISTS,
+                    report["serial"] = execute_over_dds(runner, scene, plan, frozen=WRISTS,
                                                         all_serial=True)
                     print(f"tabletop_dds: all-serial: {_one_line(report['serial'])}",
                           flush=True)
