@@ -180,13 +180,15 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
                      config: TabletopTaskConfig | None = None, all_serial: bool = False,
                      frozen: tuple[str, ...] = (), tau: float = 2.0,
                      contacts: _Contacts | None = None,
-                     pair_check: ServicePairCheck | None = None) -> dict:
+                     pair_check: ServicePairCheck | None = None, verbose: bool = False
+                     ) -> dict:
     """Execute ``plan`` through the running graph (module doc) with ``runner`` (a
     :class:`~icub_pmp.demo.scenario.DemoRunner`); returns the report as
     :meth:`TaskReport.as_dict` has it, with ``replans`` (rounds whose mode the check from the
-    measured postures changed) and ``grasp_retries``. ``pair_check``: the check of each
-    round's pair before it runs (default :class:`ServicePairCheck`); not used when
-    ``all_serial``."""
+    measured postures changed), ``grasp_retries`` and ``trace`` (after each goal: targets,
+    measured hands, the cubes' true positions). ``pair_check``: the check of each round's
+    pair before it runs (default :class:`ServicePairCheck`); not used when ``all_serial``.
+    ``verbose``: print each goal's outcome and trace entry as it ends."""
     from geometry_msgs.msg import PoseStamped
     from rclpy.qos import qos_profile_sensor_data
 
@@ -225,8 +227,18 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
     replans: list[str] = []
     goals: list[str] = []
 
+    trace: list[dict] = []
+
     def reach(targets: dict[str, np.ndarray], what: str) -> None:
         goals.append(f"{what} {sorted(targets)}: {_reach(runner, targets, frozen, tau)}")
+        hands = runner.hand_positions()
+        trace.append({"t": round(runner.sim_time(), 3), "what": what,
+                      "targets": {a: np.round(p, 3).tolist() for a, p in targets.items()},
+                      "hands": {a: np.round(hands[a], 3).tolist() for a in targets},
+                      "cubes": {n: np.round(runner.object_position(n), 3).tolist()
+                                for n in scene.objects}})
+        if verbose:
+            print(f"tabletop_dds: {goals[-1]}\n  {trace[-1]}", flush=True)
 
     def grasp(jobs: dict[str, Job], arms: list[str], held: set[str]) -> list[str]:
         """Grasp with ``arms``; returns the refused ones (their messages kept)."""
@@ -310,7 +322,7 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
             "duration": runner.sim_time() - t0, "arm_arm_contacts": contacts.arm_arm,
             "arm_object_collisions": list(contacts.arm_object), "handovers": handovers,
             "grasp_refusals": refusals, "grasp_retries": retries, "rounds": modes,
-            "replans": replans, "goals": goals,
+            "replans": replans, "goals": goals, "trace": trace,
             "final_positions": {n: np.round(runner.object_position(n), 3).tolist()
                                 for n in scene.objects},
             "wall_time": time.perf_counter() - wall0, "success": success}
@@ -358,6 +370,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--serial", action="store_true", help="also the all-serial baseline")
     ap.add_argument("--runs", type=int, default=1,
                     help="scheduled runs in the same graph (each from a reset) [-]")
+    ap.add_argument("--verbose", action="store_true", help="print every goal as it ends")
     ap.add_argument("--cubes", default="",
                     help="comma-separated cubes of the scene to use (default all: "
                          f"{','.join(SCENE.objects)})")
@@ -389,7 +402,8 @@ def main(argv: list[str] | None = None) -> int:
                           "load_average": list(os.getloadavg())}
                 runs = []
                 for k in range(args.runs):
-                    runs.append(execute_over_dds(runner, scene, plan, frozen=WRISTS))
+                    runs.append(execute_over_dds(runner, scene, plan, frozen=WRISTS,
+                                                 verbose=args.verbose))
                     print(f"tabletop_dds: run {k + 1}: {_one_line(runs[-1])}", flush=True)
                 report["scheduled"] = runs[0]
                 report["runs"] = runs

@@ -41,8 +41,9 @@ from sensor_msgs.msg import JointState, PointCloud2, PointField
 from std_srvs.srv import Trigger
 
 from icub_interfaces.srv import AllocateObjects, CheckReach, FindEmptyArea, PlanPair
+from icub_pmp.body_schema.jacobian_source import JacobianSourceConfig
 from icub_pmp.config import repo_root
-from icub_pmp.errors import IcubPmpError, InvalidInput, ModelError, UnknownName
+from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, ModelError, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.peripersonal import (
     CollisionCheckConfig,
@@ -57,7 +58,8 @@ from icub_pmp.ros.parameters import ConfigParameters
 
 __all__ = ["PeripersonalSpaceNode", "main"]
 
-_CONFIGS = (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig)
+_CONFIGS = (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig,
+            JacobianSourceConfig)
 ROOT = "root_link"
 
 
@@ -90,10 +92,11 @@ class PeripersonalSpaceNode(Node):
     def __init__(self) -> None:
         super().__init__("peripersonal_space")
         self._lock = threading.Lock()
-        self.params = ConfigParameters(self, _CONFIGS, on_change=self._on_config_change)
+        self.params = ConfigParameters(self, _CONFIGS, on_change=self._on_config_change,
+                                       read_only=JacobianSourceConfig.field_names())
         self.space: PeripersonalSpace | None = None
         self.status = "not loaded yet"
-        self.check = ImaginedCollisionCheck(self.params.get(CollisionCheckConfig))
+        self.check = self._make_check(self.params.get(CollisionCheckConfig))
         self._listener = JointStateCache(self)
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -183,9 +186,23 @@ class PeripersonalSpaceNode(Node):
         msg.data = data.tobytes()
         return msg
 
+    def _make_check(self, config: CollisionCheckConfig) -> ImaginedCollisionCheck:
+        """The imagined check on the body model of ``jacobian_source``: the URDF, or the
+        body networks learned from babbling (one per arm; ConfigError naming the file)."""
+        src = self.params.get(JacobianSourceConfig)
+        if src.jacobian_source != "learned":
+            return ImaginedCollisionCheck(config)
+        files = {"left": src.learned_model_left, "right": src.learned_model_right}
+        try:
+            check = ImaginedCollisionCheck.learned(files, config)
+        except IcubPmpError as exc:
+            raise ConfigError(f"jacobian_source learned: {exc}") from exc
+        self.get_logger().info(f"imagined reaches on the learned body models {files}")
+        return check
+
     def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
         if new[1] != old[1]:
-            self.check = ImaginedCollisionCheck(new[1])
+            self.check = self._make_check(new[1])
         if new[0] != old[0] and self.space is not None:
             with self._lock:
                 self.space = PeripersonalSpace(self.space.maps, self.space.arm_y, new[0])
