@@ -21,7 +21,10 @@ the measured cubes and the pair is checked again from the arms' measured posture
 first phase from ``/joint_states``, each next one from where the previous imagined pair
 ended): the round runs in parallel or in series as that check says, whatever the plan said.
 A refused grasp (the palm not touching the cube) is tried once more, aimed at the measured
-cube a little lower.
+cube a little lower. A goal the planner finds out of reach (the carry of a cube the palm
+pushed before grasping it, to a slot at the edge of the workspace) is sent again to where
+PMP's mental simulation brings the hands (``/pmp/reach`` simulate only): as close as the
+arm reaches, which the target area's 5 cm absorb.
 """
 
 from __future__ import annotations
@@ -125,8 +128,8 @@ class _Contacts:
 
 
 def _reach(runner: object, targets: dict[str, np.ndarray], frozen: tuple[str, ...],
-           tau: float) -> str:
-    """One /pmp/reach_action goal; returns "outcome: message"."""
+           tau: float) -> tuple[str, str]:
+    """One /pmp/reach_action goal; returns (outcome, message)."""
     from icub_interfaces.action import Reach
 
     goal = Reach.Goal()
@@ -139,7 +142,33 @@ def _reach(runner: object, targets: dict[str, np.ndarray], frozen: tuple[str, ..
         t.header.frame_id = "root_link"
         t.pose.position.x, t.pose.position.y, t.pose.position.z = (float(v) for v in p)
     res = runner.probe.send_goal(runner._action("/pmp/reach_action", Reach), goal, 900.0).result
-    return f"{res.outcome}: {res.message}"
+    return res.outcome, res.message
+
+
+def _closest_reachable(runner: object, targets: dict[str, np.ndarray],
+                       frozen: tuple[str, ...], tau: float) -> dict[str, np.ndarray]:
+    """Where the hands end when PMP imagines the reach to ``targets`` from the measured
+    posture (``/pmp/reach`` simulate_only; forward kinematics of the plan's last point): the
+    closest points to the targets the arms reach [m, root_link]."""
+    from icub_interfaces.srv import Reach
+
+    req = Reach.Request()
+    req.hands = [h for h in HANDS if h in targets]
+    req.use_torso, req.tau, req.simulate_only = False, tau, True
+    req.frozen_joints = list(frozen)
+    for h, p in targets.items():
+        t = req.left_target if h == "left" else req.right_target
+        t.header.frame_id = "root_link"
+        t.pose.position.x, t.pose.position.y, t.pose.position.z = (float(v) for v in p)
+    res = runner.probe.call("/pmp/reach", Reach, req, 120.0)
+    if not res.trajectory.points:
+        raise RuntimeError(f"/pmp/reach (simulate only) gave no plan: {res.message}")
+    js = runner.latest["js"]
+    q = runner.model.q_from_dict({**dict(zip(js.name, js.position)),
+                                  **dict(zip(res.trajectory.joint_names,
+                                             res.trajectory.points[-1].positions))})
+    return {h: runner.model.frame_position(q, runner.model.spec.hand_frame(h))
+            for h in targets}
 
 
 def _grasp(runner: object, obj: str, hand: str, attach: bool) -> tuple[bool, str]:
@@ -185,7 +214,8 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
     """Execute ``plan`` through the running graph (module doc) with ``runner`` (a
     :class:`~icub_pmp.demo.scenario.DemoRunner`); returns the report as
     :meth:`TaskReport.as_dict` has it, with ``replans`` (rounds whose mode the check from the
-    measured postures changed), ``grasp_retries`` and ``trace`` (after each goal: targets,
+    measured postures changed), ``grasp_retries``, ``reaims`` (goals out of reach sent again
+    to the closest points the arms reach) and ``trace`` (after each goal: targets,
     measured hands, the cubes' true positions). ``pair_check``: the check of each round's
     pair before it runs (default :class:`ServicePairCheck`); not used when ``all_serial``.
     ``verbose``: print each goal's outcome and trace entry as it ends."""
@@ -225,12 +255,24 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
     retries: list[str] = []
     modes: list[str] = []
     replans: list[str] = []
+    reaims: list[str] = []
     goals: list[str] = []
 
     trace: list[dict] = []
 
     def reach(targets: dict[str, np.ndarray], what: str) -> None:
-        goals.append(f"{what} {sorted(targets)}: {_reach(runner, targets, frozen, tau)}")
+        outcome, message = _reach(runner, targets, frozen, tau)
+        goals.append(f"{what} {sorted(targets)}: {outcome}: {message}")
+        if outcome == "unreachable":
+            # out of the arms' reach (a cube the palm pushed outwards, a slot at the edge of
+            # the workspace): the hands as close as the body allows, which the place's
+            # tolerance absorbs
+            near = _closest_reachable(runner, targets, frozen, tau)
+            reaims.append(f"{what}: " + ", ".join(
+                f"{a} {np.linalg.norm(near[a] - targets[a]) * 1e3:.0f} mm" for a in targets))
+            targets = near
+            outcome, message = _reach(runner, targets, frozen, tau)
+            goals.append(f"{what} (closest reachable) {sorted(targets)}: {outcome}: {message}")
         hands = runner.hand_positions()
         trace.append({"t": round(runner.sim_time(), 3), "what": what,
                       "targets": {a: np.round(p, 3).tolist() for a, p in targets.items()},
@@ -273,14 +315,15 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
                 # offset of this grasp, both measured
                 offset = hands[a] - runner.object_position(jobs[a].object)
                 carry = jobs[a].place + offset + cfg.drop_height * up
-                way[a] = (hands[a] + (cfg.lift_height - cfg.grasp_height) * up, carry,
-                          carry + (cfg.retreat_height - cfg.place_height) * up)
+                way[a] = (hands[a] + (cfg.lift_height - cfg.grasp_height) * up, carry)
             reach({a: w[0] for a, w in way.items()}, "lift")
             reach({a: w[1] for a, w in way.items()}, "above the place")
             for a in held:
                 _grasp(runner, jobs[a].object, a, False)
             runner.wait_sim(0.3)
-            reach({a: w[2] for a, w in way.items()}, "retreat")
+            hands = runner.hand_positions()  # straight up from where the hands released
+            reach({a: hands[a] + (cfg.retreat_height - cfg.place_height) * up for a in held},
+                  "retreat")
         for a in jobs:
             contacts.busy.pop(a, None)
 
@@ -322,7 +365,7 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
             "duration": runner.sim_time() - t0, "arm_arm_contacts": contacts.arm_arm,
             "arm_object_collisions": list(contacts.arm_object), "handovers": handovers,
             "grasp_refusals": refusals, "grasp_retries": retries, "rounds": modes,
-            "replans": replans, "goals": goals, "trace": trace,
+            "replans": replans, "reaims": reaims, "goals": goals, "trace": trace,
             "final_positions": {n: np.round(runner.object_position(n), 3).tolist()
                                 for n in scene.objects},
             "wall_time": time.perf_counter() - wall0, "success": success}
@@ -354,7 +397,7 @@ def _one_line(run: dict) -> str:
             f"arm-arm, {len(run['arm_object_collisions'])} arm-object, {run['handovers']} "
             f"hand-over(s), {run['duration']:.1f} s simulated, {run['wall_time']:.0f} s wall, "
             f"rounds {run['rounds']}, replans {len(run['replans'])}, grasp retries "
-            f"{run['grasp_retries']}")
+            f"{run['grasp_retries']}, re-aimed {run['reaims']}")
 
 
 def main(argv: list[str] | None = None) -> int:
