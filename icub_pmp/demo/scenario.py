@@ -1134,7 +1134,7 @@ def tabletop_parameters(params: dict[str, dict[str, object]]) -> dict[str, dict[
     from icub_pmp.demo.tabletop import SCENE
 
     away = np.array(TABLETOP_AWAY)
-    spec = " ".join(f"{n}:{away[0]},{away[1] + 0.1 * k},{away[2]}"
+    spec = " ".join(f"{n}:{away[0]:.2f},{away[1] + 0.1 * k:.2f},{away[2]:.2f}"
                     for k, n in enumerate(SCENE.objects))
     out = {k: dict(v) for k, v in params.items()}
     out["sim_bridge"]["tabletop_objects"] = spec
