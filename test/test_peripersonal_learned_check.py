@@ -95,11 +95,12 @@ def test_node_with_a_missing_model_exits_with_a_message(ros_domain_id, tmp_path)
                                 "-p", f"learned_model_left:={tmp_path / 'none.npz'}",
                                 "-p", f"learned_model_right:={tmp_path / 'none.npz'}"])
     try:
-        deadline = time.monotonic() + 120
-        while proc.alive() and time.monotonic() < deadline:
-            time.sleep(0.2)
-        assert not proc.alive()
+        assert proc.wait_for_output("none.npz", 120.0), proc.output()
+        for _ in range(300):  # it exits after saying so
+            if not proc.alive():
+                break
+            time.sleep(0.1)
         out = proc.output()
-        assert "none.npz" in out and "Traceback" not in out, out
+        assert not proc.alive() and "Traceback" not in out, out
     finally:
         proc.stop()
