@@ -21,10 +21,11 @@ the measured cubes and the pair is checked again from the arms' measured posture
 first phase from ``/joint_states``, each next one from where the previous imagined pair
 ended): the round runs in parallel or in series as that check says, whatever the plan said.
 A refused grasp (the palm not touching the cube) is tried once more, aimed at the measured
-cube a little lower. A goal the planner finds out of reach (the carry of a cube the palm
-pushed before grasping it, to a slot at the edge of the workspace) is sent again to where
-PMP's mental simulation brings the hands (``/pmp/reach`` simulate only): as close as the
-arm reaches, which the target area's 5 cm absorb.
+cube a little lower. A carry the planner finds out of reach (a cube the palm pushed before
+grasping it, to a slot at the edge of the workspace) goes to the hands above the place
+instead (the cube lands the grasp's offset off its slot); a goal still out of reach to where
+PMP's mental simulation brings the hands (``/pmp/reach`` simulate only): as close as the arm
+reaches. The target area's 5 cm absorb both.
 """
 
 from __future__ import annotations
