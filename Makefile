@@ -44,7 +44,7 @@ test-fast: env
 	scripts/env.sh scripts/run_tests.sh -m "not slow"
 
 demo: env
-	scripts/env.sh scripts/demo.sh
+	scripts/env.sh scripts/demo.sh $(DEMO_ARGS)
 
 # PMP on the learned body vs the URDF in the simulator (LEARNED_ARGS="--model FILE" etc.)
 demo-learned: env

@@ -35,6 +35,12 @@ collisions other than the grasped cube, in the physics), ``task_speedup_vs_seria
 all-serial run's simulated time over the scheduled run's), ``task_arm_arm_contacts``,
 ``task_arm_object_collisions``, ``task_handovers``. ``--no-task`` skips it.
 
+``--dds`` also runs the task over DDS (:mod:`icub_pmp.demo.tabletop_dds`: the node graph in
+lockstep, the pair check through ``/peripersonal/plan_pair``, ``/pmp/reach_action``,
+``/sim/grasp``, judged on the ground-truth topics), as scheduled and all-serial, on the same
+maps: the same figures prefixed ``task_dds_`` (10-30 min on a loaded 2-core machine: not part
+of ``--quick``, not in ``bench/registry.yaml``).
+
 Ends with one JSON line. Timings depend on the machine's load (the load average is printed).
 """
 
@@ -137,6 +143,40 @@ def tabletop_figures(space: PeripersonalSpace) -> dict:
     }
 
 
+def tabletop_dds_figures(maps: Path) -> dict:
+    """The tabletop task over DDS (module doc): ``python -m icub_pmp.demo.tabletop_dds
+    --serial`` on ``maps``, its report's figures prefixed ``task_dds_``."""
+    import subprocess
+
+    t0 = time.perf_counter()
+    out = OUT / "tabletop_dds"
+    p = subprocess.run([sys.executable, "-m", "icub_pmp.demo.tabletop_dds", "--serial",
+                        "--maps", str(maps), "--out", str(out)], capture_output=True, text=True)
+    if not (out / "report.json").exists() or p.returncode not in (0, 1):
+        print(p.stdout[-3000:] + p.stderr[-3000:], file=sys.stderr)
+        return {"task_dds_success": False, "task_dds_error": f"exit {p.returncode}"}
+    rep = json.loads((out / "report.json").read_text())
+    s, b = rep["scheduled"], rep["serial"]
+    print(f"tabletop over DDS: delivered {s['delivered']} of {s['objects']}; "
+          f"{s['duration']:.2f} s scheduled vs {b['duration']:.2f} s all-serial (simulated); "
+          f"rounds {s['rounds']}, replans {s['replans']}, grasp retries {s['grasp_retries']}",
+          file=sys.stderr)
+    return {
+        "task_dds_success": bool(rep["task_success"]),
+        "task_dds_speedup_vs_serial": round(rep["task_speedup_vs_serial"], 3),
+        "task_dds_delivered": len(s["delivered"]),
+        "task_dds_objects": s["objects"],
+        "task_dds_time_s": round(s["duration"], 2),
+        "task_dds_serial_time_s": round(b["duration"], 2),
+        "task_dds_arm_arm_contacts": s["arm_arm_contacts"],
+        "task_dds_arm_object_collisions": len(s["arm_object_collisions"]),
+        "task_dds_serial_success": bool(b["success"]),
+        "task_dds_handovers": s["handovers"],
+        "task_dds_rounds": s["rounds"],
+        "task_dds_wall_s": round(time.perf_counter() - t0, 1),
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="30 reach pairs (< 2 min)")
@@ -147,6 +187,8 @@ def main() -> None:
     ap.add_argument("--maps", type=Path, default=OUT / "peripersonal_maps")
     ap.add_argument("--retrain", action="store_true", help="train the maps even if saved")
     ap.add_argument("--no-task", action="store_true", help="skip the tabletop task")
+    ap.add_argument("--dds", action="store_true",
+                    help="also the tabletop task over DDS (task_dds_* keys; 10-30 min)")
     ap.add_argument("--estimator", action="store_true",
                     help="close the controller's torque loop on the wrench estimator too")
     args = ap.parse_args()
@@ -246,6 +288,10 @@ def main() -> None:
     }
     if not args.no_task:
         result.update(tabletop_figures(space))
+        result["wall_s"] = round(time.perf_counter() - wall0, 1)
+        result["load_avg"][1] = round(os.getloadavg()[0], 2)
+    if args.dds:
+        result.update(tabletop_dds_figures(args.maps))
         result["wall_s"] = round(time.perf_counter() - wall0, 1)
         result["load_avg"][1] = round(os.getloadavg()[0], 2)
     print(f"paper: 478 / 476 neurons (TX / RX) from about {PAPER_BABBLES} babbles; ours "

@@ -126,6 +126,50 @@ def test_plan_pair_predicts_crossing_reaches_and_clears_mirrored_ones(node, ros_
     assert np.linalg.norm([end.x + 0.28, end.y + 0.2, end.z - 0.05]) < 0.01
 
 
+def test_plan_pair_from_a_given_posture_chains_pairs(node, ros_probe):
+    """A pair imagined from the ``final`` posture of a previous answer starts where that one
+    ended (each arm's imagined path starts at its previous end), which the rest posture does
+    not; ``final`` names every joint of the body model."""
+    from icub_interfaces.srv import PlanPair
+
+    _wait_loaded(ros_probe)
+    first = _call(ros_probe, "/peripersonal/plan_pair", PlanPair,
+                  left_target=_pt(-0.28, -0.2, 0.05), right_target=_pt(-0.28, 0.2, 0.05))
+    assert first.success, first.message
+    assert len(first.final.name) == len(first.final.position) > 14
+    assert "l_elbow" in first.final.name and "r_elbow" in first.final.name
+    second = _call(ros_probe, "/peripersonal/plan_pair", PlanPair,
+                   left_target=_pt(-0.28, -0.2, 0.12), right_target=_pt(-0.28, 0.2, 0.12),
+                   start=first.final)
+    assert second.success, second.message
+    for arm in ("left", "right"):
+        end = getattr(first, f"{arm}_path")[-1]
+        start = getattr(second, f"{arm}_path")[0]
+        assert np.linalg.norm([start.x - end.x, start.y - end.y, start.z - end.z]) < 1e-3
+    rest = _call(ros_probe, "/peripersonal/plan_pair", PlanPair,
+                 left_target=_pt(-0.28, -0.2, 0.12), right_target=_pt(-0.28, 0.2, 0.12))
+    s0, e = rest.left_path[0], first.left_path[-1]
+    assert np.linalg.norm([s0.x - e.x, s0.y - e.y, s0.z - e.z]) > 0.02
+
+
+@pytest.mark.parametrize("names, positions, words", [
+    (["l_elbow", "no_such_joint"], [0.5, 0.1], "no_such_joint"),
+    (["l_elbow", "r_elbow"], [0.5], "2 names but 1 positions"),
+    (["l_elbow"], [float("nan")], "not finite"),
+])
+def test_bad_start_posture_gets_a_clear_message(node, ros_probe, names, positions, words):
+    from sensor_msgs.msg import JointState
+
+    from icub_interfaces.srv import PlanPair
+
+    _wait_loaded(ros_probe)
+    r = _call(ros_probe, "/peripersonal/plan_pair", PlanPair,
+              left_target=_pt(-0.28, -0.2, 0.05), right_target=_pt(-0.28, 0.2, 0.05),
+              start=JointState(name=names, position=positions))
+    assert not r.success and words in r.message, r.message
+    assert all(node.alive().values())
+
+
 def test_map_cloud_is_latched_with_both_arms(node, ros_probe, maps_dir):
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import PointCloud2

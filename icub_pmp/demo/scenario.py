@@ -33,6 +33,11 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
    carry the force target (``right_force``). Judged by :func:`judge_press`: the estimated
    external force within 10 % of the target, reported beside the simulator's contact force.
 
+7. ``tabletop`` (with ``--tabletop``): the two arms' tabletop task of issue 19
+   (:func:`tabletop_phase`): four cubes allocated by reward, pairs of reaches in parallel or in
+   series by the imagined collision check, a hand-over; judged on the cubes delivered and 0
+   arm-arm contacts in the physics.
+
 A phase that fails does not stop the next. Every phase is measured in the physics: the hand
 positions come from the simulator's /joint_states through the model's forward kinematics.
 Then the bag is replayed and checked, and a report (PNG plots + ``report.md``) is written
@@ -496,16 +501,21 @@ class DemoRunner:
             self.probe.wait_for(lambda t_next=t_next: self.sim_time() >= t_next, 60.0)
 
 
-def run_demo(out_dir: Path, quick: bool = False, realism: str | None = None) -> int:
+def run_demo(out_dir: Path, quick: bool = False, realism: str | None = None,
+             tabletop: bool = False) -> int:
     """Run the whole demo; returns the process exit code (non-zero if a phase failed).
-    ``realism``: the simulator's realism preset (None = the shipped config's)."""
+    ``realism``: the simulator's realism preset (None = the shipped config's); ``tabletop``:
+    the tabletop task as the last phase (:func:`tabletop_phase`)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     bag_dir = out_dir / "bag"
     results: list[PhaseResult] = []
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
         print(f"demo: ROS_DOMAIN_ID={domain}, output in {out_dir}", flush=True)
-        with NodeGraph(GRAPH, graph_parameters(realism), env=env) as graph:
+        nodes, params = GRAPH, graph_parameters(realism)
+        if tabletop:
+            nodes, params = GRAPH + TABLETOP_GRAPH, tabletop_parameters(params)
+        with NodeGraph(nodes, params, env=env) as graph:
             recorder = NodeProcess(
                 command=[str(repo_root() / "scripts/record.sh"), "-o", str(bag_dir), "--all"],
                 env=env)
@@ -518,6 +528,9 @@ def run_demo(out_dir: Path, quick: bool = False, realism: str | None = None) -> 
                 # the FT offsets, on the still robot before any goal (realism icub: a few N)
                 print(f"demo: {runner.calibrate_estimator()}", flush=True)
                 results = run_phases(runner, quick)
+                if tabletop:
+                    print("demo: phase 7, the tabletop task of the two arms", flush=True)
+                    results.append(guarded("tabletop", lambda: tabletop_phase(runner), runner))
             except Exception as exc:  # report what happened, never a bare traceback
                 results.append(PhaseResult("graph", False, f"{type(exc).__name__}: {exc}"))
                 print(graph.outputs()[-6000:], file=sys.stderr)
@@ -1107,6 +1120,75 @@ def _count_in_bag(bag_dir: Path, topic: str) -> int:
         return 0
 
 
+# ----------------------------------------------------------------- tabletop (issue 19)
+#: the tabletop phase's extra node (``--tabletop``)
+TABLETOP_GRAPH = ["peripersonal_space"]
+#: where the tabletop cubes wait until their phase (behind the robot, below the table) [m]
+TABLETOP_AWAY = (0.6, -0.3, -0.55)
+
+
+def tabletop_parameters(params: dict[str, dict[str, object]]) -> dict[str, dict[str, object]]:
+    """The demo's node parameters with the tabletop phase's: the task's cubes in the simulator
+    (behind the robot until the phase puts them on the table: the other phases' scene is
+    unchanged), ``peripersonal_space`` on simulated time with the saved maps (the phase grows
+    them first if there are none)."""
+    from icub_pmp.demo.tabletop import SCENE
+
+    away = np.array(TABLETOP_AWAY)
+    spec = " ".join(f"{n}:{away[0]:.2f},{away[1] + 0.1 * k:.2f},{away[2]:.2f}"
+                    for k, n in enumerate(SCENE.objects))
+    out = {k: dict(v) for k, v in params.items()}
+    out["sim_bridge"]["tabletop_objects"] = spec
+    out["peripersonal_space"] = {"use_sim_time": True, "grow_if_missing": False}
+    return out
+
+
+def tabletop_phase(runner: DemoRunner, name: str = "tabletop") -> PhaseResult:
+    """The tabletop task of issue 19 (:mod:`icub_pmp.demo.tabletop_dds`): four cubes, two
+    target areas, the allocation by reward, pairs in parallel or in series by the imagined
+    check through ``/peripersonal/plan_pair``, one hand-over through an empty area, the grasp
+    emulated by ``/sim/grasp``. For the phase the controller goes to its shipped impedance
+    mode (in the demo's position mode the palm presses a cube into the table) and the
+    planner's success tolerance to 1 cm (frozen wrists); both are put back after. Judged in
+    the physics: every cube delivered (within 5 cm of its place, on the table), 0 arm-arm
+    contacts and 0 collisions of an arm with a cube it is not working on."""
+    from std_srvs.srv import Trigger
+
+    from icub_pmp.demo.tabletop import SCENE, WRISTS, _space
+    from icub_pmp.demo.tabletop_dds import ServicePairCheck, execute_over_dds, set_parameters
+    from icub_pmp.peripersonal.tabletop_task import TabletopPlanner
+
+    t0 = runner.sim_time()
+    space = _space(None)  # data/peripersonal, grown and saved there if missing
+    res = runner.probe.call("/peripersonal/reload", Trigger, Trigger.Request(), 120.0)
+    if not res.success:
+        raise RuntimeError(f"/peripersonal/reload: {res.message}")
+    old = [("/impedance_controller", set_parameters(runner.probe, "/impedance_controller",
+                                                     {"mode": "impedance"})),
+           ("/pmp_planner", set_parameters(runner.probe, "/pmp_planner",
+                                           {"success_tolerance": 0.01}))]
+    try:
+        plan = TabletopPlanner(space, ServicePairCheck(runner.probe)).plan(SCENE)
+        report = execute_over_dds(runner, SCENE, plan, frozen=WRISTS)
+    finally:
+        for node, values in old:
+            set_parameters(runner.probe, node, values)
+    n = len(report["delivered"])
+    message = (f"{n} of {report['objects']} cubes delivered, {report['arm_arm_contacts']} "
+               f"arm-arm contacts, {len(report['arm_object_collisions'])} arm-object "
+               f"collisions, {report['handovers']} hand-over(s); rounds {report['rounds']}")
+    if report["grasp_refusals"]:
+        message += f"; grasps refused: {report['grasp_refusals']}"
+    return PhaseResult(name, bool(report["success"]), message,
+                       extra={"delivered": float(n), "objects": float(report["objects"]),
+                              "arm_arm_contacts": float(report["arm_arm_contacts"]),
+                              "arm_object_collisions":
+                                  float(len(report["arm_object_collisions"])),
+                              "handovers": float(report["handovers"]),
+                              "task_sim_s": float(report["duration"])},
+                       sim_start=t0, sim_end=runner.sim_time(), wall_s=report["wall_time"])
+
+
 def main(argv: list[str] | None = None) -> int:
     """``python -m icub_pmp.demo`` (what ``make demo`` runs)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -1114,9 +1196,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--realism", choices=("ideal", "icub"), default=None,
                     help="the simulator's realism preset (default: config/sim_bridge.yaml's)")
+    ap.add_argument("--tabletop", action="store_true",
+                    help="add the tabletop task of the two arms as the last phase (about 10 "
+                         "more minutes on a loaded 2-core machine)")
     args = ap.parse_args(argv)
     out = args.out or repo_root() / "bags" / time.strftime("demo-%Y%m%d-%H%M%S")
-    rc = run_demo(out, args.quick, args.realism)
+    rc = run_demo(out, args.quick, args.realism, args.tabletop)
     (out / "summary.json").write_text(json.dumps({"exit_code": rc}, indent=2))
     return rc
 

@@ -10,8 +10,10 @@ no maps loaded yet - answers success=false with a message, the node never dies o
   (the reward fields, :class:`~icub_pmp.peripersonal.TargetAllocator`);
 - ``/peripersonal/empty_area`` (FindEmptyArea): the least active neuron of the shared
   workspace, farther than the gripper width (or a given radius) from every object;
-- ``/peripersonal/plan_pair`` (PlanPair): both arms' imagined PMP reaches, the collision
-  verdict, and the schedule (parallel or serial); nothing moves.
+- ``/peripersonal/plan_pair`` (PlanPair): both arms' imagined PMP reaches (from the rest
+  posture, the measured one or a given one: ``start``), the collision verdict, the schedule
+  (parallel or serial) and the posture both reaches end in (``final``, the start of the next
+  pair of a sequence); nothing moves.
 - ``/peripersonal/reload`` (std_srvs/Trigger): load the maps of ``maps_dir`` again.
 
 Publishes ``map_topic`` (sensor_msgs/PointCloud2, latched): the neurons of both maps with
@@ -35,12 +37,13 @@ import numpy as np
 from geometry_msgs.msg import Point
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import PointCloud2, PointField
+from sensor_msgs.msg import JointState, PointCloud2, PointField
 from std_srvs.srv import Trigger
 
 from icub_interfaces.srv import AllocateObjects, CheckReach, FindEmptyArea, PlanPair
+from icub_pmp.body_schema.jacobian_source import JacobianSourceConfig
 from icub_pmp.config import repo_root
-from icub_pmp.errors import IcubPmpError, InvalidInput, ModelError, UnknownName
+from icub_pmp.errors import ConfigError, IcubPmpError, InvalidInput, ModelError, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS
 from icub_pmp.peripersonal import (
     CollisionCheckConfig,
@@ -55,7 +58,8 @@ from icub_pmp.ros.parameters import ConfigParameters
 
 __all__ = ["PeripersonalSpaceNode", "main"]
 
-_CONFIGS = (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig)
+_CONFIGS = (PeripersonalConfig, CollisionCheckConfig, PeripersonalNodeConfig,
+            JacobianSourceConfig)
 ROOT = "root_link"
 
 
@@ -88,10 +92,11 @@ class PeripersonalSpaceNode(Node):
     def __init__(self) -> None:
         super().__init__("peripersonal_space")
         self._lock = threading.Lock()
-        self.params = ConfigParameters(self, _CONFIGS, on_change=self._on_config_change)
+        self.params = ConfigParameters(self, _CONFIGS, on_change=self._on_config_change,
+                                       read_only=JacobianSourceConfig.field_names())
         self.space: PeripersonalSpace | None = None
         self.status = "not loaded yet"
-        self.check = ImaginedCollisionCheck(self.params.get(CollisionCheckConfig))
+        self.check = self._make_check(self.params.get(CollisionCheckConfig))
         self._listener = JointStateCache(self)
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -181,9 +186,23 @@ class PeripersonalSpaceNode(Node):
         msg.data = data.tobytes()
         return msg
 
+    def _make_check(self, config: CollisionCheckConfig) -> ImaginedCollisionCheck:
+        """The imagined check on the body model of ``jacobian_source``: the URDF, or the
+        body networks learned from babbling (one per arm; ConfigError naming the file)."""
+        src = self.params.get(JacobianSourceConfig)
+        if src.jacobian_source != "learned":
+            return ImaginedCollisionCheck(config)
+        files = {"left": src.learned_model_left, "right": src.learned_model_right}
+        try:
+            check = ImaginedCollisionCheck.learned(files, config)
+        except IcubPmpError as exc:
+            raise ConfigError(f"jacobian_source learned: {exc}") from exc
+        self.get_logger().info(f"imagined reaches on the learned body models {files}")
+        return check
+
     def _on_config_change(self, old: tuple, new: tuple, changed: frozenset[str]) -> None:
         if new[1] != old[1]:
-            self.check = ImaginedCollisionCheck(new[1])
+            self.check = self._make_check(new[1])
         if new[0] != old[0] and self.space is not None:
             with self._lock:
                 self.space = PeripersonalSpace(self.space.maps, self.space.arm_y, new[0])
@@ -264,13 +283,15 @@ class PeripersonalSpaceNode(Node):
             targets = {"left": points_array([req.left_target], "left_target")[0],
                        "right": points_array([req.right_target], "right_target")[0]}
             first = _arm(req.first or "left")
-            q_start = None
+            q_start: dict[str, float] | None = None
             if req.from_current:
                 js = self._listener.latest()
                 if js is None:
                     raise InvalidInput("from_current: no /joint_states received yet (is "
                                        "sim_bridge running?)")
-                q_start = js.positions
+                q_start = dict(js.positions)
+            if req.start.name or req.start.position:
+                q_start = {**(q_start or {}), **self._start_posture(req.start)}
             plan = self.check.plan_pair(targets, q_start, first)
             v, sch = plan.verdict, plan.schedule
             res.collides = bool(v.collides)
@@ -286,12 +307,32 @@ class PeripersonalSpaceNode(Node):
             res.left_path = [_point(p) for p in plan.plans["left"].hand_paths["left"]]
             res.right_path = [_point(p) for p in plan.plans["right"].hand_paths["right"]]
             res.planning_time = float(plan.planning_time)
+            names = list(self.check.provider.joint_names)
+            q_end = self.check.planner.start_configuration(q_start)
+            for p in plan.plans.values():
+                q_end[[names.index(j) for j in p.joint_names]] = p.positions[-1]
+            res.final.name = names
+            res.final.position = [float(v) for v in q_end]
             res.message = (f"{'collision predicted' if v.collides else 'no collision'} "
                            f"(distal {v.min_distal_distance * 1e3:.0f} mm, hulls "
                            f"{v.min_clearance * 1e3:.0f} mm): {sch.mode}, "
                            f"{len(sch.steps)} step(s), {sch.duration:.2f} s")
 
         return self._serve("/peripersonal/plan_pair", res, run)
+
+    def _start_posture(self, start: JointState) -> dict[str, float]:
+        """{joint: rad} of a request's ``start`` (InvalidInput for lists of different
+        lengths, an unknown joint, a NaN)."""
+        names, pos = list(start.name), list(start.position)
+        if len(names) != len(pos):
+            raise InvalidInput(f"start: {len(names)} names but {len(pos)} positions")
+        known = self.check.provider.joint_names
+        for n, v in zip(names, pos):
+            if n not in known:
+                raise UnknownName("joint", n, known)
+            if not math.isfinite(v):
+                raise InvalidInput(f"start: position of {n} is not finite: {v}")
+        return dict(zip(names, (float(v) for v in pos)))
 
     def _on_reload(self, req: Trigger.Request, res: Trigger.Response) -> Trigger.Response:
         try:

@@ -18,7 +18,8 @@ found through bounding capsules first) are compared with the other arm's.
 Steps of :meth:`ImaginedCollisionCheck.plan_pair`:
 
 1. imagine each arm's reach from the start posture (:class:`~icub_pmp.pmp.PmpPlanner` on the
-   body model: the URDF now, a learned body schema later);
+   body model: the URDF, or the body networks learned from babbling, the paper's "mental
+   simulation" on the learned internal model, :meth:`ImaginedCollisionCheck.learned`);
 2. sample both motions on a common clock every ``check_period`` (an arm that finished holds
    its final posture) and compare them (:meth:`compare`): distal test and capsule test;
 3. clear: a parallel schedule; else serial: the first arm reaches while the second holds its
@@ -65,6 +66,9 @@ class ImaginedCollisionCheck:
         config: thresholds, timing, safe posture (:class:`CollisionCheckConfig`).
         planner: the PMP planner on the body model (default: URDF through pinocchio).
         body: the arms' distal frames and capsules (default: fitted to the URDF meshes).
+            Its provider may be another body model than the planner's (a learned body model
+            imagines the joint motions, whose link geometry it does not know): the imagined
+            joints are then posed on the body's provider, its other joints at rest.
         frozen_joints: joints that no imagined reach moves (default none).
     """
 
@@ -81,6 +85,17 @@ class ImaginedCollisionCheck:
         self.body = body or ArmBodyModel.from_urdf(self.provider, self.spec, c.capsule_links,
                                                    c.distal_frames, c.hull_spacing)
         self._names = self.provider.joint_names
+        body_names = list(self.body.provider.joint_names)
+        # the planner's joints among the body model's (identity when they are the same model)
+        self._to_body: np.ndarray | None = None
+        if list(self._names) != body_names:
+            missing = [n for n in self._names if n not in body_names]
+            if missing:
+                raise InvalidInput(f"body: the body model has no joints {missing} of the "
+                                   "planner's configuration")
+            rest = self.spec.posture("rest")
+            self._body_rest = np.array([rest.get(n, 0.0) for n in body_names])
+            self._to_body = np.array([body_names.index(n) for n in self._names])
         self._arm_idx = {a: np.array([self._names.index(j) for j in self.spec.arm_joints(a)])
                          for a in HANDS}
         park = self.spec.posture(c.safe_posture)  # raises UnknownName for a bad posture
@@ -149,6 +164,7 @@ class ImaginedCollisionCheck:
             for j, name in enumerate(names):
                 Q[:, self._names.index(name)] = np.interp(grid, t, pos[:, j])
         b = self.body
+        Q = self._on_body(Q)
         dl, dr = b.distal_points("left", Q), b.distal_points("right", Q)
         dd = np.linalg.norm(dl[:, :, None, :] - dr[:, None, :, :], axis=3)  # (K, D, D)
         dmin_k = dd.reshape(len(grid), -1).min(axis=1)
@@ -167,6 +183,36 @@ class ImaginedCollisionCheck:
             t_close = float(grid[k_d])
         return CollisionVerdict(distal_hit or body_hit, distal_hit, body_hit, min_distal,
                                 min_clear, t_close, links)
+
+    def _on_body(self, Q: np.ndarray) -> np.ndarray:
+        """Configurations (K, nq) of the planner as the body model's (K, nq_body)."""
+        if self._to_body is None:
+            return Q
+        out = np.repeat(self._body_rest[None], len(Q), axis=0)
+        out[:, self._to_body] = Q
+        return out
+
+    @classmethod
+    def learned(cls, models: Mapping[str, str], config: CollisionCheckConfig | None = None,
+                frozen_joints: Sequence[str] = ()) -> "ImaginedCollisionCheck":
+        """The check with the reaches imagined on body networks learned from babbling
+        (:class:`~icub_pmp.body_schema.LearnedJacobianProvider`; ``models`` {arm: .npz file},
+        one per arm: both arms are imagined) and the arms' link geometry posed on the URDF
+        (a hand-position network knows no link shapes)."""
+        from icub_pmp.body_schema.learned_jacobian_provider import LearnedJacobianProvider
+        from icub_pmp.pmp.pinocchio_provider import PinocchioJacobianProvider
+
+        missing = [a for a in HANDS if not models.get(a)]
+        if missing:
+            raise InvalidInput(f"models: a learned body model per arm is needed, missing "
+                               f"{missing}")
+        c = config or CollisionCheckConfig()
+        urdf = PinocchioJacobianProvider()
+        planner = PmpPlanner(provider=LearnedJacobianProvider.from_files(
+            {a: models[a] for a in HANDS}))
+        body = ArmBodyModel.from_urdf(urdf, urdf.icub.spec, c.capsule_links, c.distal_frames,
+                                      c.hull_spacing)
+        return cls(c, planner, body, frozen_joints)
 
     def _hull_clearance(self, Q: np.ndarray) -> tuple[float, tuple[int, int, int]]:
         """Smallest distance [m] between a left and a right link hull over the samples Q
