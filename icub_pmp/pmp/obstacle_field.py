@@ -110,6 +110,17 @@ class ObstacleField:
         rho = max(rho, self.rho_min)
         return self.gain * (1.0 / rho - 1.0 / self.influence) / rho**2 * n
 
+    def sphere_forces(self, x, radii) -> tuple[np.ndarray, np.ndarray]:
+        """Repulsive forces (n, 3) [N] on spheres centred at ``x`` (n, 3) [m] with ``radii``
+        (n,) [m] (the field of :meth:`force` with the clearance reduced by each radius), and
+        their clearances (n,) [m] (< 0: closer than the clearance to keep)."""
+        dist, n = self._surface(np.asarray(x, dtype=float))
+        rho = dist - self.inflation - np.asarray(radii, dtype=float)
+        r = np.maximum(rho, self.rho_min)
+        mag = np.where(rho < self.influence,
+                       self.gain * (1.0 / r - 1.0 / self.influence) / r**2, 0.0)
+        return mag[:, None] * n, rho
+
     def potential(self, x) -> float:
         """FIRAS potential [J] at ``x``."""
         rho = max(float(self.clearance(x)), self.rho_min)
