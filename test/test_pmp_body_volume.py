@@ -64,6 +64,25 @@ def test_sphere_torques_are_the_transposed_jacobian_of_the_sphere_centres(planne
         num = (vol.positions(p.kinematics(q + dq, vol.frames))
                - vol.positions(p.kinematics(q - dq, vol.frames))) / (2 * eps)
         assert abs(float(np.sum(num * f)) - tau[j]) < 1e-5
+        assert np.allclose(vol.jacobians(p.kinematics(q, vol.frames))[:, :, j], num, atol=1e-6)
+
+
+def test_sphere_field_stiffness_is_the_derivative_of_its_force():
+    """``sphere_forces``: a sphere of radius r feels the field at clearance rho - r, and the
+    stiffness it reports is -d|F|/d rho (finite differences), 0 beyond the influence."""
+    ob = BoxObstacleField([0.0, 0.0, 0.0], np.eye(3), [0.05, 0.05, 0.05], influence=0.05,
+                          inflation=0.02)
+    x = np.array([[0.1, 0.0, 0.0], [0.0, 0.2, 0.0]])
+    r = np.array([0.01, 0.01])
+    f, rho, k = ob.sphere_forces(x, r)
+    assert np.allclose(rho, [0.1 - 0.05 - 0.02 - 0.01, 0.2 - 0.05 - 0.02 - 0.01])
+    assert np.allclose(f[0], ob.force(x[0] - [0.01, 0.0, 0.0]))
+    assert np.allclose(f[1], 0.0) and k[1] == 0.0
+    eps = 1e-7
+    fp, _, _ = ob.sphere_forces(x[:1] + [eps, 0.0, 0.0], r[:1])
+    fm, _, _ = ob.sphere_forces(x[:1] - [eps, 0.0, 0.0], r[:1])
+    num = -(np.linalg.norm(fp) - np.linalg.norm(fm)) / (2 * eps)
+    assert abs(num - k[0]) < 1e-4 * abs(k[0])
 
 
 @pytest.mark.parametrize("bad, match", [

@@ -108,6 +108,12 @@ class BodyVolume:
         return (np.einsum("nij,nj->ni", kin.rotations[self.owner], self.centers)
                 + kin.positions[self.owner])
 
+    def jacobians(self, kin: FrameKinematics) -> np.ndarray:
+        """Translational Jacobians (n, 3, nq) of the sphere centres: ``J_v - [R c]x J_w``."""
+        arm = np.einsum("nij,nj->ni", kin.rotations[self.owner], self.centers)
+        jac = kin.jacobians[self.owner]
+        return jac[:, :3] - np.cross(arm[:, :, None], jac[:, 3:], axis=1)
+
     def torques(self, kin: FrameKinematics, forces: np.ndarray) -> np.ndarray:
         """Joint torques (nq,) of ``forces`` (n, 3) [N] acting on the sphere centres:
         ``sum_i J_i^T f_i`` with ``J_i = J_v - [R c_i]x J_w`` of the sphere's frame."""

@@ -334,9 +334,11 @@ class PmpNetwork:
                     clearance = min(clearance, float(ob.clearance(pos[i])))
         torque, stiff, excess = self._internal(z, q, s)
         if self.obstacles and self.volumes:
-            body_torque, body_clearance = self._volume_fields(q, kin, pos)
+            body_torque, body_stiff, body_clearance = self._volume_fields(q, kin, pos)
             torque = torque.copy()
             torque[: self.n] += body_torque
+            stiff = stiff.copy()
+            stiff[: self.n] += body_stiff
             clearance = min(clearance, body_clearance)
         d = self._final_targets - pos
         pos_err = np.sqrt((d * d).sum(axis=1))
@@ -344,28 +346,42 @@ class PmpNetwork:
             force, g, torque, stiff, pos, rot, pos_err, rot_err, clearance, excess
         )
 
-    def _volume_fields(self, q: np.ndarray, kin, pos: np.ndarray) -> tuple[np.ndarray, float]:
-        """Torques (n,) of the obstacle fields on the body volumes' spheres at ``q`` and the
-        smallest sphere clearance [m] (to the grown obstacles). From twice
+    def _volume_fields(self, q: np.ndarray, kin, pos: np.ndarray  # noqa: ANN001
+                       ) -> tuple[np.ndarray, np.ndarray, float]:
+        """Torques (n,) of the obstacle fields on the body volumes' spheres at ``q``, their
+        diagonal joint stiffness (n,) and the smallest sphere clearance [m] (to the grown
+        obstacles). From twice
         ``volume_null_distance`` of its target to that distance, a hand's volume torques fade
         into the null space of its position task
         (``T - J^T (J A J^T)^-1 J A T``): the arm still turns its fingers and forearm away, but
         no longer pushes the hand off the target (the equilibrium stays on it, as
         :meth:`ObstacleField.clear_of` keeps it for the hand frame)."""
         torque = np.zeros(self.n)
+        stiffness = np.zeros(self.n)
         clearance = np.inf
         a = self.admittance[: self.n]
         for hand, vol in self.volumes.items():
             vk = self.provider.kinematics(q, vol.frames)
             pts = vol.positions(vk)
             forces = np.zeros_like(pts)
+            k_normal = []
             for ob in self.obstacles:
-                f, rho = ob.sphere_forces(pts, vol.radii)
+                f, rho, k = ob.sphere_forces(pts, vol.radii)
                 forces += f
+                k_normal.append((f, k))
                 clearance = min(clearance, float(rho.min()))
             if not np.any(forces):
                 continue
             t = vol.torques(vk, forces)[self.joint_index]
+            # the fields' stiffness along their normals, on the joints' diagonal (the implicit
+            # step then slides along the obstacle instead of bouncing off it)
+            jp = vol.jacobians(vk)[:, :, self.joint_index]  # (n, 3, joints)
+            for f, k in k_normal:
+                live = k > 0
+                if np.any(live):
+                    nrm = f[live] / np.maximum(np.linalg.norm(f[live], axis=1), 1e-12)[:, None]
+                    proj = np.einsum("ni,nij->nj", nrm, jp[live])
+                    stiffness += (k[live][:, None] * proj**2).sum(axis=0)
             i = self.hands.index(hand)
             err = float(np.linalg.norm(self._final_targets[i] - pos[i]))
             d = self.volume_null_distance
@@ -379,7 +395,7 @@ class PmpNetwork:
                     null = t
                 t = w * t + (1.0 - w) * null
             torque += t
-        return torque, clearance
+        return torque, stiffness, clearance
 
     def body_clearances(self, q_samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """At each configuration of ``q_samples`` (K, nq): the smallest distance [m] of every
