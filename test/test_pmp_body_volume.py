@@ -119,3 +119,23 @@ def test_the_fingers_keep_the_clearance_the_hand_frame_alone_did_not(planners, h
     assert plan.residuals["right"] < 1e-3
     assert dist.min() >= CLEARANCE, dist.min()
     assert plan.obstacle_clearance <= dist.min() + 1e-9  # the spheres bound the hulls
+
+
+def test_the_idle_left_arm_stays_within_its_velocity_limits(planners):
+    """The demo's obstacle reach moves the trunk under the idle left arm, which holds its hand
+    (decision 0056): no joint of the plan exceeds its velocity limit at the asked tau (an idle
+    wrist once jumped 1.6 rad in one sample, slowing the 3 s reach to 137 s)."""
+    planner = PmpPlanner(dataclasses.replace(PmpConfig(), hold_idle_hands=True),
+                         provider=planners[0].provider)
+    obstacle = BoxObstacleField(CYLINDER, np.eye(3), [0.03, 0.03, 0.06], influence=0.05,
+                                inflation=CLEARANCE + 0.005)
+    up = planner.plan(ReachGoal(targets={"right": START_UP}, tau=1.5))
+    start = planner.plan(ReachGoal(targets={"right": START}, tau=1.5), up.q_final)
+    plan = planner.plan(ReachGoal(targets={"right": TARGET}, tau=3.0, obstacles=(obstacle,)),
+                        start.q_final)
+    assert plan.success, plan.message
+    idle = [i for i, j in enumerate(plan.joint_names) if j.startswith("l_")]
+    assert idle  # the left arm is in the trajectory
+    speed = np.abs(np.diff(plan.positions[:, idle], axis=0)) / np.diff(plan.t)[:, None]
+    vmax = np.array([planner.spec.velocity_limit(plan.joint_names[i]) for i in idle])
+    assert np.all(speed <= vmax), speed.max(axis=0)
