@@ -792,15 +792,14 @@ def cylinder_obstacle(position: np.ndarray) -> object:
 
 
 #: phase 5: the right hand's start and target on either side of the cylinder, placed between
-#: them on the table [m, root_link], and the clearance the plan keeps from it [m]
-#: (the straight way passes 2 cm below the cylinder's top; the plan goes over it. Placed beside
-#: the hand's way rather than ahead of it: only the hand is kept clear by the planner, and the
-#: forearm trailing a hand that goes around an object ahead of it swept the object in trials;
-#: with a 6 cm clearance a demo run's fingers still brushed its top)
+#: them on the table [m, root_link], and the clearance the plan keeps from it [m]: the planner
+#: keeps the hand's, wrist's and forearm's collision hulls that far (``obstacle_body_links``,
+#: docs/decisions/0060; with only the hand frame kept clear the fingers, up to 10 cm from it,
+#: brushed the cylinder's top in demo runs). The straight way passes 2 cm below the top.
 OBSTACLE_START = np.array([-0.36, 0.34, 0.02])
 OBSTACLE_TARGET = np.array([-0.36, 0.02, 0.02])
 OBSTACLE_POSITION = np.array([-0.36, 0.17, -0.03])
-OBSTACLE_CLEARANCE = 0.09
+OBSTACLE_CLEARANCE = 0.02
 
 
 def obstacle_reach(runner: DemoRunner, name: str = "obstacle_reach") -> PhaseResult:
@@ -850,31 +849,30 @@ def joint_stiffness(joints: list[str]) -> dict[str, float]:
 #: surface z = -0.09, config/sim_bridge.yaml) and the force it exerts on it [N]
 PRESS_POINT = np.array([-0.30, 0.15, -0.09])
 PRESS_FORCE = np.array([0.0, 0.0, -10.0])
-PRESS_ITERATIONS = 4
+#: the force loop: at most PRESS_MAX_ITERATIONS corrected presses, stopping once the estimate
+#: is within PRESS_STOP_TOLERANCE of the target (below the judged PRESS_FORCE_TOLERANCE)
+PRESS_MAX_ITERATIONS = 8
+PRESS_STOP_TOLERANCE = 0.04
 #: where the cylinder waits during the press (far corner of the table) [m, root_link]
 PRESS_CYLINDER_AWAY = np.array([-0.56, 0.38, -0.03])
 
 
-def press_compliance_scale(previous: tuple[np.ndarray, float] | None,
-                           current: tuple[np.ndarray, float], model: float,
-                           direction: np.ndarray) -> float:
-    """Factor on the model's compliance from the last two presses (a secant): the target
-    moved by ``dx`` along ``direction`` and the exerted force changed by ``dF`` [N], so the
-    arm and contact together yield ``dx / dF`` [m/N] against ``model`` (``f^T C f``); 1 when
-    there is no previous press or the change is too small to tell, else within [0.5, 5].
-
-    Args:
-        previous, current: (target (3,) [m], exerted force along ``direction`` [N]).
-        model: the model's compliance along ``direction`` [m/N] (> 0).
-        direction: (3,) unit vector of the target force.
-    """
-    if previous is None or not model > 0.0:
-        return 1.0
-    dx = float((np.asarray(current[0]) - np.asarray(previous[0])) @ direction)
-    dF = current[1] - previous[1]
-    if dF < 0.5 or dx <= 0.0:
-        return 1.0
-    return float(np.clip(dx / dF / model, 0.5, 5.0))
+def press_compliance_update(C: np.ndarray, dx: np.ndarray, dF: np.ndarray,
+                            min_change: float = 0.3) -> np.ndarray:
+    """Broyden's update of the press compliance ``C`` (3, 3) [m/N] from one more press: the
+    target moved by ``dx`` (3,) [m] and the force the hand exerts changed by ``dF`` (3,) [N];
+    the updated matrix maps ``dF`` to ``dx`` exactly and is unchanged across ``dF``. Kept as
+    it is when the force changed by less than ``min_change`` [N] (too little to tell) or when
+    the update would make the compliance along ``dF`` non-positive (a contact that slipped)."""
+    C = np.asarray(C, float)
+    dx, dF = np.asarray(dx, float), np.asarray(dF, float)
+    n2 = float(dF @ dF)
+    if not np.all(np.isfinite(dx)) or not np.all(np.isfinite(dF)) or n2 < min_change**2:
+        return C
+    new = C + np.outer(dx - C @ dF, dF) / n2
+    if not float(dF @ new @ dF) > 0.0:
+        return C
+    return new
 
 
 def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
@@ -883,13 +881,17 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     The controller is a joint spring (position mode, ``tau = -K (q - q_d) + g``): a force is
     realised by a target beyond the surface, ``x_contact + C F`` with the hand's compliance
     ``C = J K^-1 J^T`` at the measured contact posture (:func:`hand_compliance`). The hand goes
-    above the point, down onto the table (the contact posture is measured), then
-    ``PRESS_ITERATIONS`` reaches through /pmp/reach_action with the force target
+    above the point, down onto the table (the contact posture is measured), then up to
+    ``PRESS_MAX_ITERATIONS`` reaches through /pmp/reach_action with the force target
     (``right_force``: the plan's torques at the final posture are checked against the limits)
     correct the target by ``C (F - F_measured)`` from the wrench estimator's force (an outer
-    force loop on the estimate, as the iCub's force control closes it on the FT sensors).
-    Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the simulator's
-    contact force reported beside it."""
+    force loop on the estimate, as the iCub's force control closes it on the FT sensors),
+    until the estimate is within ``PRESS_STOP_TOLERANCE``. The model's ``C`` is that of the
+    hand frame, while the fingers or palm touch the table several cm away and the hand turns
+    about them: after each press Broyden's update (:func:`press_compliance_update`) fits ``C``
+    to the measured force changes, in all three directions (the sideways force of friction
+    included). Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the
+    simulator's contact force reported beside it."""
     from icub_pmp.control.hand_compliance import hand_compliance
 
     spec = runner.model.spec
@@ -906,33 +908,39 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     estimated = runner.force_since("right", t)
     contact = runner.hand_positions()["right"]  # the hand at the measured contact posture
     C = hand_compliance(runner.model, runner.q(), frame, stiffness)
-    target = contact + C @ PRESS_FORCE
-    results = []
-    f = PRESS_FORCE / np.linalg.norm(PRESS_FORCE)
-    presses: list[tuple[np.ndarray, float]] = []  # (target, exerted force along f) per press
-    for k in range(PRESS_ITERATIONS):
-        if k:  # correct by the force still missing (the estimate is the world on the hand)
-            C = hand_compliance(runner.model, runner.q(), frame, stiffness)
-            scale = press_compliance_scale(presses[-2] if k > 1 else None, presses[-1],
-                                           float(f @ C @ f), f)
-            target = target + scale * C @ (PRESS_FORCE + estimated)
-        results.append(runner.pmp_reach(
-            name if k == PRESS_ITERATIONS - 1 else f"{name}_{k}", {"right": target},
-            use_torso=True, tau=1.0, judge_physics=False, forces={"right": PRESS_FORCE}))
+    # the first press: from the measured contact, as if no force were exerted yet
+    target = contact + C @ (PRESS_FORCE + estimated)
+    norm = float(np.linalg.norm(PRESS_FORCE))
+    previous = (contact, -estimated)
+    r = None
+    errors = []
+    for k in range(PRESS_MAX_ITERATIONS):
+        r = runner.pmp_reach(f"{name}_{k}", {"right": target}, use_torso=True, tau=1.0,
+                             judge_physics=False, forces={"right": PRESS_FORCE})
         runner.wait_sim(0.3)
         t = runner.sim_time()
         runner.wait_sim(0.3)
         estimated = runner.force_since("right", t)
-        presses.append((target.copy(), float(-estimated @ f)))
-    r = results[-1]
+        exerted = -estimated
+        errors.append(float(np.linalg.norm(exerted - PRESS_FORCE)) / norm)
+        if errors[-1] <= PRESS_STOP_TOLERANCE:
+            break
+        C = press_compliance_update(C, target - previous[0], exerted - previous[1])
+        previous = (target.copy(), exerted)
+        target = target + C @ (PRESS_FORCE - exerted)
+    if r is None:  # PRESS_MAX_ITERATIONS < 1
+        raise RuntimeError("press: no press was made")
+    r.name = name
     r.extra["press_depth_m"] = float(np.linalg.norm(target - contact))
+    r.extra["press_iterations"] = float(len(errors))
+    r.extra["press_first_error_rel"] = errors[0]
     gt = runner.latest.get("gt_right")
     truth = None if gt is None else np.array([gt.wrench.force.x, gt.wrench.force.y,
                                               gt.wrench.force.z])
     ok, message, figures = judge_press(estimated, PRESS_FORCE, truth)
     r.extra.update(figures)
     r.success = bool(r.success and ok)
-    r.message = f"{message} ({r.message})"
+    r.message = f"{message} after {len(errors)} presses ({r.message})"
     # lift the hand off the table
     runner.pmp_reach(f"{name}_off", {"right": PRESS_POINT + [0.0, 0.0, 0.08]},
                      use_torso=True, tau=1.0, judge_physics=False)
