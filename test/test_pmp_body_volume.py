@@ -18,8 +18,11 @@ LINKS = ("hand", "wrist_1", "forearm")
 #: the demo's obstacle scene (icub_pmp/demo/scenario.py, phase 5): the cylinder's box on the
 #: table between the right hand's start and target [m, root_link]
 START_UP = np.array([-0.22, 0.34, 0.12])
-START = np.array([-0.36, 0.34, 0.02])
-TARGET = np.array([-0.36, 0.02, 0.02])
+START = np.array([-0.36, 0.34, 0.04])
+TARGET = np.array([-0.36, 0.0, 0.06])
+#: a lower start and target, 2 cm above the cylinder's top: the hand frame alone passes
+START_LOW = np.array([-0.36, 0.34, 0.02])
+TARGET_LOW = np.array([-0.36, 0.02, 0.02])
 CYLINDER = np.array([-0.36, 0.17, -0.03])
 CLEARANCE = 0.02
 
@@ -97,17 +100,17 @@ def test_bad_spheres_are_rejected_by_name(bad, match):
 
 
 def test_the_fingers_keep_the_clearance_the_hand_frame_alone_did_not(planners, hulls):
-    """The demo's scene: with only the hand frame kept 2 cm clear, the hand's hull (fingers,
-    thumb) goes through the obstacle; with the body volume every hull sample of the hand,
-    wrist and forearm stays at least the clearance away along the whole sampled plan, and the
-    hand still arrives."""
+    """The demo's cylinder, the hand 2 cm above its top on either side: with only the hand
+    frame kept 2 cm clear, the hand's hull (fingers, thumb) goes through the obstacle; with
+    the body volume every hull sample of the hand, wrist and forearm stays at least the
+    clearance away along the whole sampled plan, and the hand still arrives."""
     obstacle = BoxObstacleField(CYLINDER, np.eye(3), [0.03, 0.03, 0.06], influence=0.05,
                                 inflation=CLEARANCE + 0.005)
     results = {}
     for name, planner in zip(("body", "hand"), planners):
         up = planner.plan(ReachGoal(targets={"right": START_UP}, tau=1.5))
-        start = planner.plan(ReachGoal(targets={"right": START}, tau=1.5), up.q_final)
-        plan = planner.plan(ReachGoal(targets={"right": TARGET}, tau=3.0,
+        start = planner.plan(ReachGoal(targets={"right": START_LOW}, tau=1.5), up.q_final)
+        plan = planner.plan(ReachGoal(targets={"right": TARGET_LOW}, tau=3.0,
                                       obstacles=(obstacle,)), start.q_final)
         results[name] = (plan, hull_distances(
             planner.provider, hulls, plan.configurations(planner.provider.joint_names),
