@@ -882,39 +882,88 @@ def press_compliance_update(C: np.ndarray, dx: np.ndarray, dF: np.ndarray,
     return new
 
 
+def hand_contact_point(model: IcubModel, q: np.ndarray, link: str = "r_hand") -> np.ndarray:
+    """The lowest point (3,) [m, root_link] of ``link``'s collision hull at posture ``q``:
+    where a hand lowered onto the table touches it (the fingertips, up to 6 cm below the hand
+    frame in the demo's press posture)."""
+    from icub_pmp.peripersonal.link_hull import LinkHull
+
+    hull = _hand_hulls().get(link)
+    if not isinstance(hull, LinkHull):
+        raise KeyError(f"no collision hull for {link}")
+    pose = model.frame_pose(q, link)
+    pts = hull.points @ np.asarray(pose.rotation).T + np.asarray(pose.translation)
+    return pts[int(np.argmin(pts[:, 2]))]
+
+
+def _hand_hulls() -> dict:
+    """link -> LinkHull of both hands' collision meshes (built once)."""
+    if not hasattr(_hand_hulls, "cache"):
+        from icub_pmp.peripersonal import ArmBodyModel
+        from icub_pmp.pmp import PinocchioJacobianProvider
+
+        body = ArmBodyModel.from_urdf(PinocchioJacobianProvider(), links=("hand",))
+        _hand_hulls.cache = {h.frame: h for hs in body.hulls.values() for h in hs}
+    return _hand_hulls.cache
+
+
+def contact_compliance(model: IcubModel, q: np.ndarray, frame: str, contact: np.ndarray,
+                       joint_stiffness: dict[str, float]) -> np.ndarray:
+    """``C = J_h K^-1 J_c^T`` (3, 3) [m/N]: how far the set-point of ``frame``'s origin must go
+    beyond its measured position for the joint springs to push with a force at ``contact``
+    (3,) [m] on the same link (``J_c = J_v - [c - x_h]x J_w``)."""
+    names = list(joint_stiffness)
+    k = np.array([joint_stiffness[n] for n in names], dtype=float)
+    J = model.frame_jacobian(q, frame)[:, model.indices(names)]
+    r = np.asarray(contact, float) - model.frame_position(q, frame)
+    skew = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    Jc = J[:3] - skew @ J[3:]
+    return (J[:3] / k) @ Jc.T
+
+
 def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     """Phase 6: the right hand presses down on the table top with ``PRESS_FORCE``.
 
     The controller is a joint spring (position mode, ``tau = -K (q - q_d) + g``): a force is
-    realised by a target beyond the surface, ``x_contact + C F`` with the hand's compliance
-    ``C = J K^-1 J^T`` at the measured contact posture (:func:`hand_compliance`). The hand goes
-    above the point, down onto the table (the contact posture is measured), then up to
+    realised by a target beyond the surface, ``x_contact + C F`` with the compliance
+    ``C = J_h K^-1 J_c^T`` of the hand frame for a force at the contact point (the lowest
+    point of the hand's collision hull: the fingertips, about 6 cm below the frame;
+    :func:`contact_compliance`). The hand goes above the point, down until the fingertips
+    touch the table (:func:`hand_contact_point`; the contact posture is measured), then up to
     ``PRESS_MAX_ITERATIONS`` reaches through /pmp/reach_action with the force target
     (``right_force``: the plan's torques at the final posture are checked against the limits)
     correct the target by ``C (F - F_measured)`` from the wrench estimator's force (an outer
     force loop on the estimate, as the iCub's force control closes it on the FT sensors),
-    until the estimate is within ``PRESS_STOP_TOLERANCE``. The model's ``C`` is that of the
-    hand frame, while the fingers or palm touch the table several cm away and the hand turns
-    about them: after each press Broyden's update (:func:`press_compliance_update`) fits ``C``
+    until the estimate is within ``PRESS_STOP_TOLERANCE``. The model leaves out the contact's
+    friction and the hand turning about it: after each press Broyden's update (:func:`press_compliance_update`) fits ``C``
     to the measured force changes, in all three directions (the sideways force of friction
     included). Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the
     simulator's contact force reported beside it."""
-    from icub_pmp.control.hand_compliance import hand_compliance
-
     spec = runner.model.spec
     stiffness = joint_stiffness(list(spec.torso_joints) + list(spec.arm_joints("right")))
     frame = spec.hand_frame("right")
     runner.set_object("cylinder", PRESS_CYLINDER_AWAY)  # phase 5 left it beside the point
     runner.pmp_reach(f"{name}_above", {"right": PRESS_POINT + [0.0, 0.0, 0.08]},
                      use_torso=True, tau=1.5, judge_physics=False)
-    runner.pmp_reach(f"{name}_touch", {"right": PRESS_POINT}, use_torso=True, tau=1.5,
-                     judge_physics=False)
-    runner.wait_sim(0.3)
-    t = runner.sim_time()
-    runner.wait_sim(0.3)
-    estimated = runner.force_since("right", t)
+    # touch: the hand frame lowered until its hull's lowest point (the fingertips) is 3 mm
+    # into the table top, then 1 cm further while the estimator feels less than 1 N
+    above = runner.hand_positions()["right"]
+    drop = above[2] - hand_contact_point(runner.model, runner.q())[2]
+    touch = PRESS_POINT + [0.0, 0.0, drop - 0.003]
+    for _ in range(4):
+        runner.pmp_reach(f"{name}_touch", {"right": touch}, use_torso=True, tau=1.5,
+                         judge_physics=False)
+        runner.wait_sim(0.3)
+        t = runner.sim_time()
+        runner.wait_sim(0.3)
+        estimated = runner.force_since("right", t)
+        if float(-estimated @ PRESS_FORCE) / float(np.linalg.norm(PRESS_FORCE)) >= 1.0:
+            break
+        touch = touch + [0.0, 0.0, -0.01]
     contact = runner.hand_positions()["right"]  # the hand at the measured contact posture
-    C = hand_compliance(runner.model, runner.q(), frame, stiffness)
+    q = runner.q()
+    C = contact_compliance(runner.model, q, frame, hand_contact_point(runner.model, q),
+                           stiffness)
     # the first press: from the measured contact, as if no force were exerted yet
     target = contact + C @ (PRESS_FORCE + estimated)
     norm = float(np.linalg.norm(PRESS_FORCE))
@@ -930,6 +979,7 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
         estimated = runner.force_since("right", t)
         exerted = -estimated
         errors.append(float(np.linalg.norm(exerted - PRESS_FORCE)) / norm)
+        r.extra[f"press_error_rel_{k}"] = errors[-1]
         if errors[-1] <= PRESS_STOP_TOLERANCE:
             break
         C = press_compliance_update(C, target - previous[0], exerted - previous[1])
