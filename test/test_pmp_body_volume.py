@@ -126,8 +126,8 @@ def test_the_fingers_keep_the_clearance_the_hand_frame_alone_did_not(planners, h
 
 def test_the_idle_left_arm_stays_within_its_velocity_limits(planners):
     """The demo's obstacle reach moves the trunk under the idle left arm, which holds its hand
-    (decision 0056): no joint of the plan exceeds its velocity limit at the asked tau (an idle
-    wrist once jumped 1.6 rad in one sample, slowing the 3 s reach to 137 s)."""
+    (decision 0056): no idle joint exceeds its velocity or acceleration limit at the asked tau
+    (an idle wrist once jumped 1.6 rad in one sample, slowing the 3 s reach to 137 s)."""
     planner = PmpPlanner(dataclasses.replace(PmpConfig(), hold_idle_hands=True),
                          provider=planners[0].provider)
     obstacle = BoxObstacleField(CYLINDER, np.eye(3), [0.03, 0.03, 0.06], influence=0.05,
@@ -142,3 +142,6 @@ def test_the_idle_left_arm_stays_within_its_velocity_limits(planners):
     speed = np.abs(np.diff(plan.positions[:, idle], axis=0)) / np.diff(plan.t)[:, None]
     vmax = np.array([planner.spec.velocity_limit(plan.joint_names[i]) for i in idle])
     assert np.all(speed <= vmax), speed.max(axis=0)
+    acc = np.abs(np.diff(speed, axis=0)) / np.diff(plan.t)[1:, None]
+    amax = np.array([planner.spec.acceleration_limit(plan.joint_names[i]) for i in idle])
+    assert np.all(acc <= amax), acc.max(axis=0)

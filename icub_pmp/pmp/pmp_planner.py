@@ -376,10 +376,12 @@ class PmpPlanner:
         if idle:  # decision 0056: the idle hands stay where they were
             dt = float(np.min(np.diff(times))) if len(times) > 1 else c.sample_period
             for frame, arm in idle:
-                # at most half the joints' velocity limits from one sample to the next
+                # at most half the joints' velocity and acceleration limits
                 vmax = np.array([self.spec.velocity_limit(self._names[i]) for i in arm])
-                q_full[:, arm] = hold_idle_hand(self.provider, frame, arm, q_full,
-                                                c.idle_hand_margin, max_step=0.5 * vmax * dt)
+                amax = np.array([self.spec.acceleration_limit(self._names[i]) for i in arm])
+                q_full[:, arm] = hold_idle_hand(
+                    self.provider, frame, arm, q_full, c.idle_hand_margin,
+                    max_step=0.5 * vmax * dt, max_step_change=0.5 * amax * dt * dt)
             extra = [i for _, arm in idle for i in arm]
             names = names + tuple(self._names[i] for i in extra)
             joints = np.hstack([joints, q_full[:, extra]])
