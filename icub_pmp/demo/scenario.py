@@ -937,7 +937,8 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     until the estimate is within ``PRESS_STOP_TOLERANCE``. The model leaves out the contact's
     friction and the hand turning about it: after each press Broyden's update
     (:func:`press_compliance_update`) fits ``C`` to the measured force changes, in all three
-    directions (the sideways force of friction included). Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the
+    directions (the sideways force of friction included).
+    Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the
     simulator's contact force reported beside it."""
     spec = runner.model.spec
     stiffness = joint_stiffness(list(spec.torso_joints) + list(spec.arm_joints("right")))
