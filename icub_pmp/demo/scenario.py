@@ -980,7 +980,6 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
         estimated = runner.force_since("right", t)
         exerted = -estimated
         errors.append(float(np.linalg.norm(exerted - PRESS_FORCE)) / norm)
-        r.extra[f"press_error_rel_{k}"] = errors[-1]
         if errors[-1] <= PRESS_STOP_TOLERANCE:
             break
         C = press_compliance_update(C, target - previous[0], exerted - previous[1])
@@ -992,6 +991,7 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     r.extra["press_depth_m"] = float(np.linalg.norm(target - contact))
     r.extra["press_iterations"] = float(len(errors))
     r.extra["press_first_error_rel"] = errors[0]
+    r.extra.update({f"press_error_rel_{k}": e for k, e in enumerate(errors)})
     gt = runner.latest.get("gt_right")
     truth = None if gt is None else np.array([gt.wrench.force.x, gt.wrench.force.y,
                                               gt.wrench.force.z])
