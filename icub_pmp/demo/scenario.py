@@ -121,8 +121,8 @@ class PhaseResult:
 #: The obstacle reach: the planner now keeps the fingers', wrist's and forearm's hulls clear
 #: and no run since touched the cylinder; with the final code 3 of 3 runs passed, not yet the
 #: 5 of 5 this needs on the loaded machine (earlier goals ran out of the 300 s of wall time
-#: before the idle arm's rate bounds). The press: 0 of 2 runs within 10 % (9.5 N down, 1.1-1.3 N sideways from the
-#: fingertips' friction). Issue 20 stays open on them.
+#: before the idle arm's rate bounds). The press: 0 of 2 runs within 10 % (9.5 N down,
+#: 1.1-1.3 N sideways from the fingertips' friction). Issue 20 stays open on them.
 PROVISIONAL_PHASES = ("obstacle_reach", "press")
 
 
