@@ -242,15 +242,13 @@ class _Driver:
             self.probe.destroy(client)
 
     def rest(self, duration: float = 2.0, posture: str = "rest") -> None:
-        """Right arm back to the rest posture (both arms to ``posture`` when it is another
-        one) through the controller's trajectory action."""
+        """Both arms to ``posture`` (config/robot.yaml) through the controller's trajectory
+        action: every reach of a planner starts where the other's did."""
         from icub_interfaces.action import FollowJointTrajectory
         from icub_pmp.ros.conversions import arrays_to_trajectory
 
         rest = self.spec.posture(posture)
-        names = list(self.spec.right_arm_joints)
-        if posture != "rest":
-            names += list(self.spec.left_arm_joints)
+        names = list(self.spec.right_arm_joints) + list(self.spec.left_arm_joints)
         goal = FollowJointTrajectory.Goal()
         goal.trajectory = arrays_to_trajectory(names, [duration],
                                                np.array([[rest.get(j, 0.0) for j in names]]))
