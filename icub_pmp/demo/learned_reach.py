@@ -96,6 +96,9 @@ OBJECTS = (ObjectMotion((-0.33, -0.10, -0.03), (0.0, 0.2, 0.0), 1.0),
 #: (7 cm) of the robot's own arms as its own (the still target of an object stopping 10 cm
 #: from the right hand at rest never came)
 WATCH_POSTURE = "park"
+#: where the box waits while the cylinder is moved (far left on the table, as in
+#: bench/vision_reach.py): at its place in config/sim_bridge.yaml it is in the cylinder's way
+BOX_AWAY = np.array([-0.52, -0.40, -0.05])
 
 
 @dataclass(frozen=True)
@@ -396,6 +399,8 @@ def run_reaches(model_path: Path, targets: np.ndarray, tau: float = 2.0,
                     raise TimeoutError("no /joint_states after 300 s: " + graph.outputs()[-3000:])
                 if runner is not None:
                     runner.wait_ready(300.0, services=("/sim/set_object_pose", "/gaze/look_at"))
+                    # the box (x -0.37..-0.29, y -0.10..0.10 m) stands where the cylinder moves
+                    runner.set_object("box", BOX_AWAY)
                     _wait_for_segmenter(probe)
                     drv.rest(posture=WATCH_POSTURE)
                     # the segmenter's first motion is lost or mis-measured (its stereo matching
