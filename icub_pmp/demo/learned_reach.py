@@ -469,7 +469,7 @@ def summary(records: list[ReachRecord]) -> dict[str, dict[str, float]]:
 def vision_summary(records: list[VisionRecord]) -> dict[str, dict[str, float]]:
     """Per planner: objects, success (judged by ``scenario.judge_vision_reach``), median and
     max true error against the point above the cylinder [mm], median error against the goal
-    sent [mm]; and the stereo estimates' error [mm] (``vision``)."""
+    sent [mm]; and the stereo estimates' error [mm] (``stereo``)."""
     def mm(values: list[float], how) -> float | None:  # noqa: ANN001 - np.median / np.max
         e = np.array(values, dtype=float)
         e = e[np.isfinite(e)]
@@ -486,7 +486,7 @@ def vision_summary(records: list[VisionRecord]) -> dict[str, dict[str, float]]:
                 "goal_err_mm_median": mm([r.goal_error for r in rows], np.median)}
     if records:
         first = [r for r in records if r.planner == PLANNERS[0]]
-        out["vision"] = {"estimates": len(first),
+        out["stereo"] = {"estimates": len(first),
                          "target_err_mm_median": mm([r.target_error for r in first], np.median),
                          "target_err_mm_max": mm([r.target_error for r in first], np.max)}
     return out
