@@ -330,8 +330,8 @@ def see(runner: DemoRunner, motion: ObjectMotion, timeout: float) -> Seen:
 
 def _see_again(runner: DemoRunner, motion: ObjectMotion, timeout: float,
                log, index: int) -> Seen:  # noqa: ANN001 - print-like
-    """:func:`see`, and once more when no still target came the first time (the tracker lost
-    a stopping object in 1 of the 8 motions of decision 0059's runs)."""
+    """:func:`see`, and once more when no still target came the first time (a stopped
+    cylinder got no still target in two of the runs behind decision 0059)."""
     try:
         return see(runner, motion, timeout)
     except TimeoutError as exc:
