@@ -89,6 +89,7 @@ def run(n: int, realism: str | None = None) -> dict:
             try:
                 runner = DemoRunner(probe)
                 runner.wait_ready(services=("/pmp/reach", "/sim/set_object_pose",
+                                             "/sim/move_object",
                                              "/gaze/look_at"))
                 runner.set_object("box", np.array([-0.52, -0.40, -0.05]))
                 sim0 = runner.sim_time()
