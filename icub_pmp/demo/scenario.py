@@ -745,7 +745,8 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     if est is None:
         runner.set_tracking(False)
         return PhaseResult(name, False, "no still stereo target of the cylinder after it "
-                           "stopped (/motion/target/estimate)", sim_start=t0)
+                           "stopped (/motion/target/estimate)", sim_start=t0,
+                           extra={"motion_s": t_end - t0})
     stamp = time_to_sec(est.header.stamp)
     first = min((time_to_sec(m.header.stamp) for m in list(runner.estimates)),
                 default=stamp)
@@ -776,6 +777,7 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
         "first_target_after_motion_s": first - t0,
         "via_points": float(len(points) - 1),
         "goal_sent_s": goal_sent,
+        "motion_s": t_end - t0,
     })
     vr.success = bool(vr.success and ok)
     vr.message = f"{message} ({vr.message})"
