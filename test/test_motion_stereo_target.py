@@ -233,3 +233,35 @@ def test_still_object_after_a_last_jump_gets_a_still_estimate_within_the_goal(sc
     assert seen_motion <= 2  # the jump is (almost) not seen as motion
     assert max(errs) < 0.010, np.round(np.array(errs) * 1000, 1)
     assert set(sources) == {"region"}
+
+
+def _estimate(p) -> "object":
+    from icub_pmp.vision.object_locator import ObjectEstimate
+
+    p = np.asarray(p, float)
+    return ObjectEstimate(p, p + [0, 0, 0.06], np.eye(3) * 1e-6, 0.12, 0.03, np.array([0, 0, 1.0]),
+                          p - [0, 0, 0.06], 500, 100, 1.0)
+
+
+def test_a_stale_target_gives_way_to_the_next_object_but_a_measured_one_does_not():
+    """A followed object measured every frame keeps its target against a one-frame measurement
+    of another object 20 cm away; once the target has gone unmeasured for switch_frames frames
+    (the object was taken away), the next object measured takes over at once."""
+    from icub_pmp.vision.object_tracker import ObjectTracker
+
+    tr = ObjectTracker()
+    a, b = np.array([-0.38, 0.0, -0.03]), np.array([-0.38, 0.2, -0.03])
+    t = 0.0
+    for _ in range(5):
+        t += 1 / 30
+        tr.update(t, _estimate(a), moving=False)
+    t += 1 / 30
+    tg = tr.update(t, _estimate(b), moving=True)
+    assert np.linalg.norm(tg.position - a) < 1e-3 and tg.state == "held"
+    for _ in range(3):
+        t += 1 / 30
+        tg = tr.update(t, None)
+    assert tg.state == "held"
+    t += 1 / 30
+    tg = tr.update(t, _estimate(b), moving=True)
+    assert np.linalg.norm(tg.position - b) < 1e-3 and tg.state in ("moving", "still")

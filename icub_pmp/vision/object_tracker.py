@@ -14,7 +14,8 @@ averaging its old and new places would leave the target between them for many fr
 Without any measurement the target is held where it was last measured (an object that nobody
 sees moving stays where it is) for ``hold_time``. A measurement farther than ``track_gate``
 from the target is another object: it takes over only after ``switch_frames`` measurements in a
-row near each other.
+row near each other, or at once when the target itself has not been measured for
+``switch_frames`` frames (a stale target, e.g. of an object taken away, must not hide the next).
 """
 
 from __future__ import annotations
@@ -160,7 +161,9 @@ class ObjectTracker:
             else:
                 self._candidate_frames = 1
             self._candidate = z
-            if self._candidate_frames >= c.switch_frames:
+            # a target that has not been measured for switch_frames frames (its region shows
+            # nothing: the object was taken away) gives way at once
+            if self._candidate_frames >= c.switch_frames or self._misses >= c.switch_frames:
                 self._start(stamp, measurement, moving)
             else:
                 self._misses += 1
