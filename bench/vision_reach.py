@@ -24,7 +24,12 @@ Figures (one JSON line at the end):
 - ``detect_to_goal_ms_median``: simulated time from the first camera image after the motion
   began to the first reach goal sent (the reach waits for the object to stop, so this includes
   the motion itself); ``still_to_goal_ms_median``: from the end of the motion to that goal;
-- ``method``: ``geometric`` (rays from the kinematic camera poses); ``wall_s``, ``sim_s``.
+- ``method``: ``geometric`` (rays from the kinematic camera poses) or ``eye_hand_map``
+  (``--eye-hand-map FILE``: the map learned from babbling); ``wall_s``, ``sim_s``.
+
+The cylinder is moved by the simulator along its trajectory in simulated time
+(/sim/move_object), so the motions are the same at any load. A failed trial prints the stereo
+estimates that followed the motion (state/source/points/error in mm).
 """
 
 from __future__ import annotations
@@ -51,10 +56,16 @@ GRAPH = ["sim_bridge", "impedance_controller", "pmp_planner", "motion_segmenter"
          "gaze_controller"]
 
 
-def graph_params(realism: str | None) -> dict[str, dict[str, object]]:
+def graph_params(realism: str | None, eye_hand_map: str = "") -> dict[str, dict[str, object]]:
     """The demo's parameters of the bench's nodes (``realism``: the simulator's preset, with
-    the eye calibration of the ``icub`` robot; None = config/sim_bridge.yaml's)."""
-    return {n: p for n, p in graph_parameters(realism).items() if n in GRAPH}
+    the eye calibration of the ``icub`` robot; None = config/sim_bridge.yaml's;
+    ``eye_hand_map``: a learned eye-hand map (.npz) as the segmenter's 3-D source, '' =
+    triangulation)."""
+    params = {n: dict(p) for n, p in graph_parameters(realism).items() if n in GRAPH}
+    if eye_hand_map:
+        params["motion_segmenter"].update({"target_source": "eye_hand_map",
+                                           "eye_hand_map_file": eye_hand_map})
+    return params
 
 
 PARAMS = graph_params(None)
@@ -77,18 +88,20 @@ def trials(n: int, seed: int = 23) -> list[tuple[np.ndarray, np.ndarray, float]]
     return out
 
 
-def run(n: int, realism: str | None = None) -> dict:
-    """Run ``n`` trials in a fresh graph (``realism``: the simulator's preset); returns the
+def run(n: int, realism: str | None = None, eye_hand_map: str = "") -> dict:
+    """Run ``n`` trials in a fresh graph (``realism``: the simulator's preset;
+    ``eye_hand_map``: the learned map as the 3-D source, '' = triangulation); returns the
     figures."""
     errs, arrivals, ok, d2g, s2g = [], [], [], [], []
     wall0 = time.monotonic()
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
-        with NodeGraph(GRAPH, graph_params(realism), env=env) as graph:
+        with NodeGraph(GRAPH, graph_params(realism, eye_hand_map), env=env) as graph:
             probe = RosProbe(domain, "bench_vision_reach")
             try:
                 runner = DemoRunner(probe)
                 runner.wait_ready(services=("/pmp/reach", "/sim/set_object_pose",
+                                             "/sim/move_object",
                                              "/gaze/look_at"))
                 runner.set_object("box", np.array([-0.52, -0.40, -0.05]))
                 sim0 = runner.sim_time()
@@ -111,6 +124,9 @@ def run(n: int, realism: str | None = None) -> dict:
                         s2g.append(r.extra["goal_sent_s"] - dur)
                     print(f"trial {k}: {'ok' if r.success else 'FAILED'} {r.message} "
                           f"{ {a: round(b, 4) for a, b in r.extra.items()} }", flush=True)
+                    if not r.success:
+                        print(f"  estimates after the motion: {estimate_trace(runner, r)}",
+                              flush=True)
                 sim_s = runner.sim_time() - sim0
             except Exception:
                 print(graph.outputs()[-4000:], file=sys.stderr)
@@ -122,7 +138,8 @@ def run(n: int, realism: str | None = None) -> dict:
         return float(np.percentile(a, q) * 1000) if len(a) else math.nan
 
     return {
-        "bench": "vision_reach", "method": "geometric", "realism": realism or "config",
+        "bench": "vision_reach", "method": "eye_hand_map" if eye_hand_map else "geometric",
+        "realism": realism or "config",
         "trials": n,
         "target_err_mm_median": pct(errs, 50), "target_err_mm_p95": pct(errs, 95),
         "target_estimates": len(errs),
@@ -134,6 +151,24 @@ def run(n: int, realism: str | None = None) -> dict:
     }
 
 
+def estimate_trace(runner: DemoRunner, r) -> str:  # noqa: ANN001 - PhaseResult
+    """The stereo estimates of a failed trial from the end of the motion: stamp [s] after the
+    motion's start, state, source, points, error vs the ground truth [mm] (for diagnosis)."""
+    end = r.sim_start + r.extra.get("motion_s", 0.0)
+    rows = []
+    for m in list(runner.estimates):
+        t = time_to_sec(m.header.stamp)
+        if t < end - 0.1:
+            continue
+        p = np.array([m.position.x, m.position.y, m.position.z])
+        try:
+            e = f"{np.linalg.norm(p - runner.object_position_at('cylinder', t)) * 1e3:.0f}"
+        except KeyError:
+            e = "?"
+        rows.append(f"{t - r.sim_start:.2f}:{m.state}/{m.source}/{m.points}/{e}")
+    return " ".join(rows[:40]) or "none"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -142,9 +177,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--realism", choices=("ideal", "icub"), default=None,
                     help="the simulator's realism preset (icub: the miscalibrated cameras and "
                          "this robot's eye calibration; default: config/sim_bridge.yaml's)")
+    ap.add_argument("--eye-hand-map", default="", metavar="FILE",
+                    help="the segmenter's 3-D target from this learned eye-hand map (.npz, e.g. "
+                         "bench/body_schema.py --save-models DIR writes DIR/eye_hand_nominal.npz) "
+                         "instead of triangulation")
     args = ap.parse_args(argv)
     n = args.trials or (5 if args.quick else 20)
-    print(json.dumps(run(n, args.realism)))
+    eye_hand = str(Path(args.eye_hand_map).resolve()) if args.eye_hand_map else ""
+    if eye_hand and not Path(eye_hand).is_file():
+        ap.error(f"--eye-hand-map: no file {eye_hand}")
+    print(json.dumps(run(n, args.realism, eye_hand)))
     return 0
 
 

@@ -20,7 +20,8 @@ subscribes /effort_command (JointState name + effort [N m]; any subset of joints
            whole with a throttled warning on unknown names, NaN/inf, length mismatch)
            /sim/status (icub_interfaces/SimStatus, reliable + transient local: running,
            holding or paused and why, divergences; on change and every wall second)
-services   /sim/reset (ResetSim), /sim/set_object_pose (SetObjectPose), /sim/set_paused
+services   /sim/reset (ResetSim), /sim/set_object_pose (SetObjectPose), /sim/move_object
+           (MoveObject: an object moved at constant velocity in simulated time), /sim/set_paused
            (std_srvs/SetBool), /sim/apply_wrench (ApplyWrench: bounded force, torque and
            duration; a request beyond the bounds is answered success=false with the reason),
            /sim/grasp (Grasp: the emulated grasp of a tabletop cube, a weld switched on only
@@ -72,10 +73,11 @@ from std_srvs.srv import SetBool
 from icub_interfaces.msg import ObjectContact as ObjectContactMsg
 from icub_interfaces.msg import ObjectContacts, SelfContacts, SimStatus
 from icub_interfaces.msg import SelfContact as SelfContactMsg
-from icub_interfaces.srv import ApplyWrench, Grasp, ResetSim, SetObjectPose
+from icub_interfaces.srv import ApplyWrench, Grasp, MoveObject, ResetSim, SetObjectPose
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.ros.conversions import (
     pose_to_arrays,
+    sec_to_time,
     validate_joint_state,
     wrench_to_array,
 )
@@ -215,6 +217,7 @@ class SimBridge(Node):
         self.create_subscription(JointState, "/effort_command", self._on_effort, sd, raw=True)
         self.create_service(ResetSim, "/sim/reset", self._srv_reset)
         self.create_service(SetObjectPose, "/sim/set_object_pose", self._srv_set_object_pose)
+        self.create_service(MoveObject, "/sim/move_object", self._srv_move_object)
         self.create_service(SetBool, "/sim/set_paused", self._srv_set_paused)
         self.create_service(ApplyWrench, "/sim/apply_wrench", self._srv_apply_wrench)
         self.create_service(Grasp, "/sim/grasp", self._srv_grasp)
@@ -384,6 +387,23 @@ class SimBridge(Node):
             return f"{req.name} at {np.round(p, 4).tolist()}"
 
         resp.success, resp.message = self._run_in_loop(do)
+        return resp
+
+    def _srv_move_object(self, req: MoveObject.Request, resp: MoveObject.Response
+                         ) -> MoveObject.Response:
+        times: list[float] = []
+
+        def do() -> str:
+            p, q = pose_to_arrays(req.pose)
+            v = [req.velocity.x, req.velocity.y, req.velocity.z]
+            times.extend(self.sim.move_object(req.name, p, v, req.duration, q))
+            return (f"{req.name} moves from {np.round(p, 4).tolist()} at "
+                    f"{np.round(v, 4).tolist()} m/s for {req.duration:g} s of simulated time "
+                    f"(t = {times[0]:.3f} to {times[1]:.3f} s)")
+
+        resp.success, resp.message = self._run_in_loop(do)
+        if times:
+            resp.start, resp.end = sec_to_time(times[0]), sec_to_time(times[1])
         return resp
 
     def _srv_set_paused(self, req: SetBool.Request, resp: SetBool.Response) -> SetBool.Response:

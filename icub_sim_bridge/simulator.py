@@ -32,6 +32,7 @@ step, torque applied during it):
   arm, an arm against the torso), one :class:`SelfContact` per MuJoCo contact point.
 
 Scene: :meth:`object_pose`, :meth:`set_object_pose` (``box``, ``cylinder``, the tabletop cubes),
+:meth:`move_object` (a constant-velocity motion in simulated time),
 :meth:`object_contacts` (ground truth: robot links touching objects), :meth:`grasp` /
 :meth:`release` (the emulated grasp of a cube: a weld switched on only on palm contact),
 :meth:`apply_wrench` (a scripted external wrench on a body or at a frame for a duration).
@@ -68,6 +69,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 from typing import Iterable, NamedTuple, Sequence
 
 import mujoco
@@ -200,6 +202,15 @@ class _AppliedWrench:
     until: float  # sim time [s]
 
 
+@dataclasses.dataclass
+class _ObjectMotion:
+    start: np.ndarray  # position at t0 [m]
+    quaternion: np.ndarray  # (w, x, y, z), kept
+    velocity: np.ndarray  # [m/s]
+    t0: float  # sim time of the start [s]
+    duration: float  # [s]
+
+
 class Simulator:
     """The simulated iCub (see module doc)."""
 
@@ -293,6 +304,7 @@ class Simulator:
         self._dof_of = np.full(self.n, -1, dtype=int)
         self._dof_of[self._jidx] = self._dadr
         self._applied: list[_AppliedWrench] = []
+        self._motions: dict[str, _ObjectMotion] = {}  # object -> scripted motion (move_object)
         self._xfrc_dirty = False
         self._tau_cmd = np.zeros(self.n)
         self._commanded = np.zeros(self.n, dtype=bool)
@@ -366,6 +378,7 @@ class Simulator:
         self._commanded = np.zeros(self.n, dtype=bool)
         self._set_held()
         self._applied.clear()
+        self._motions.clear()
         self._keep_good_state()
 
     def _posture_dict(self, q: dict[str, float]) -> dict[str, float]:
@@ -508,6 +521,8 @@ class Simulator:
             self._update_hold()
             if self._applied or self._xfrc_dirty:
                 self._update_applied()
+            if self._motions:
+                self._update_motions()
             if imp is not None:
                 self._before_step(imp)
             mujoco.mj_step(m, d)
@@ -564,6 +579,7 @@ class Simulator:
         np.copyto(d.qpos, self._good_qpos)
         mujoco.mj_forward(m, d)
         self._applied.clear()
+        self._motions.clear()
         self._xfrc_dirty = False
         self._q_hold = np.clip(self.true_joint_state().position, self.lower, self.upper)
         self._tau_cmd = np.zeros(self.n)
@@ -585,6 +601,23 @@ class Simulator:
             p = d.xpos[a.body] + d.xmat[a.body].reshape(3, 3) @ a.point_body
             d.xfrc_applied[a.body, :3] += a.force
             d.xfrc_applied[a.body, 3:] += a.torque + _cross(p - d.xipos[a.body], a.force)
+
+    def _update_motions(self) -> None:
+        """Put every scripted object where its motion is at this step's time (and with its
+        velocity, so the step integrates along it); a finished motion leaves it at rest."""
+        d = self.data
+        t = float(d.time)
+        for name, mo in list(self._motions.items()):
+            _, qa, da = self._objects[name]
+            s = min(max(t - mo.t0, 0.0), mo.duration)
+            d.qpos[qa:qa + 3] = mo.start + mo.velocity * s
+            d.qpos[qa + 3:qa + 7] = mo.quaternion
+            d.qvel[da + 3:da + 6] = 0.0
+            if t >= mo.t0 + mo.duration - 1e-12:
+                d.qvel[da:da + 3] = 0.0
+                del self._motions[name]
+            else:
+                d.qvel[da:da + 3] = mo.velocity
 
     # ------------------------------------------------------------------ sensors
     def ft(self, name: str) -> Wrench:
@@ -787,7 +820,48 @@ class Simulator:
 
     def set_object_pose(self, name: str, position: Sequence[float],
                         quaternion: Sequence[float] = (1.0, 0.0, 0.0, 0.0)) -> None:
-        """Teleport object ``name`` to ``position`` [m], ``quaternion`` (w, x, y, z), at rest."""
+        """Teleport object ``name`` to ``position`` [m], ``quaternion`` (w, x, y, z), at rest
+        (a scripted motion of it, :meth:`move_object`, ends)."""
+        p, q = self._checked_object_pose(name, position, quaternion)
+        self._motions.pop(name, None)
+        _, qa, da = self._objects[name]
+        self.data.qpos[qa:qa + 3] = p
+        self.data.qpos[qa + 3:qa + 7] = q
+        self.data.qvel[da:da + 6] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+        self._keep_good_state()
+
+    def move_object(self, name: str, position: Sequence[float], velocity: Sequence[float],
+                    duration: float, quaternion: Sequence[float] = (1.0, 0.0, 0.0, 0.0)
+                    ) -> tuple[float, float]:
+        """Move object ``name`` from ``position`` [m] at constant ``velocity`` [m/s]
+        (root_link) for ``duration`` [s] of simulated time, then leave it at rest: each
+        :meth:`step` puts it where the motion is at that step's time, so the motion is the same
+        however fast the simulation runs. Teleporting it, a reset or another motion of it ends
+        the motion. Returns the simulated times [s] of its start (now) and end.
+
+        Raises:
+            InvalidInput: a bad start or end pose (as :meth:`set_object_pose`), a velocity that
+                is not (3,) finite, a duration outside (0, ``max_wrench_duration``].
+        """
+        v = np.asarray(velocity, dtype=float).reshape(-1)
+        if v.size != 3 or not np.all(np.isfinite(v)):
+            raise InvalidInput(f"move_object: velocity must be 3 finite values [m/s], got "
+                               f"{v.tolist()}")
+        limit = self.config.max_wrench_duration
+        if not (math.isfinite(duration) and 0.0 < duration <= limit):
+            raise InvalidInput(f"move_object: duration must be in (0, {limit:g}] s "
+                               f"(max_wrench_duration), got {duration:g}")
+        p, q = self._checked_object_pose(name, position, quaternion)
+        self._checked_object_pose(name, p + v * duration, q)
+        self.set_object_pose(name, p, q)
+        t0 = float(self.data.time)
+        self._motions[name] = _ObjectMotion(p, q, v, t0, float(duration))
+        return t0, t0 + float(duration)
+
+    def _checked_object_pose(self, name: str, position: Sequence[float],
+                             quaternion: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+        """(position (3,), unit quaternion (4,)) of a valid object pose, else InvalidInput."""
         if name not in self._objects:
             raise UnknownName("object", name, self._objects)
         p = np.asarray(position, dtype=float).reshape(-1)
@@ -806,12 +880,7 @@ class Simulator:
         if p[2] < self.floor_height:
             raise InvalidInput(f"object pose: position z = {p[2]:g} m is below the floor "
                                f"(z = {self.floor_height:g} m)")
-        _, qa, da = self._objects[name]
-        self.data.qpos[qa:qa + 3] = p
-        self.data.qpos[qa + 3:qa + 7] = q / nq
-        self.data.qvel[da:da + 6] = 0.0
-        mujoco.mj_forward(self.model, self.data)
-        self._keep_good_state()
+        return p, q / nq
 
     def apply_wrench(self, target: str, force: Sequence[float], torque: Sequence[float],
                      duration: float) -> None:

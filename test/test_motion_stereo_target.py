@@ -199,3 +199,69 @@ def _follow_sliding_cylinder(scene, calibration=None) -> None:
     assert abs(np.mean(along)) < 0.003, np.mean(along)
     assert no_motion >= 20  # the segmenter no longer sees it: the target is kept by stereo
     assert max(still_err) < 0.010 and tg.state == "still" and tg.speed == 0.0
+
+
+@pytest.mark.parametrize("jump", [(0.0, 0.05, 0.0), (0.04, 0.0, 0.0), (0.0, -0.02, 0.0)])
+def test_still_object_after_a_last_jump_gets_a_still_estimate_within_the_goal(scene, jump):
+    """The cylinder slides, stops, and then jumps a few centimetres between two images (a
+    teleport: the segmenter sees no motion) and stays there: from the first image after the
+    jump on, the target is a still estimate measured in the images (not merely held) within
+    10 mm of where the cylinder now is, for the whole second that follows. (Without the region
+    re-centring and the tracker's restart on a still measurement it cannot explain, the target
+    crept towards the cylinder over several frames, 2-4 cm off at first.)"""
+    seg = {s: MotionSegmenter() for s in ("left", "right")}
+    target = StereoTarget(left=scene.camera)
+    start, vel = np.array([-0.38, -0.08, -0.03]), np.array([0.0, 0.2, 0.0])
+    errs, sources, seen_motion = [], [], 0
+    for k in range(66):
+        t = k / 30.0
+        centre = start + vel * min(max(t - 0.1, 0.0), 0.5)
+        after = t >= 1.2
+        if after:
+            centre = centre + np.array(jump)
+        scene.pose(LOOK_DOWN, {"cylinder": centre, "box": [-0.52, -0.40, -0.05]})
+        f = scene.render()
+        rl, rr = seg["left"].process(f.left), seg["right"].process(f.right)
+        res = target.process(t, f.left, f.right, rl, rr, f.poses)
+        if after:
+            tg = res.target
+            seen_motion += int(rl.has_motion or rr.has_motion)
+            assert tg.valid and tg.state == "still", (k, tg.state, res.note)
+            assert res.measurement is not None, (k, res.note)
+            errs.append(np.linalg.norm(tg.position - centre))
+            sources.append(res.source)
+    assert seen_motion <= 2  # the jump is (almost) not seen as motion
+    assert max(errs) < 0.010, np.round(np.array(errs) * 1000, 1)
+    assert set(sources) == {"region"}
+
+
+def _estimate(p) -> "object":
+    from icub_pmp.vision.object_locator import ObjectEstimate
+
+    p = np.asarray(p, float)
+    return ObjectEstimate(p, p + [0, 0, 0.06], np.eye(3) * 1e-6, 0.12, 0.03, np.array([0, 0, 1.0]),
+                          p - [0, 0, 0.06], 500, 100, 1.0)
+
+
+def test_a_stale_target_gives_way_to_the_next_object_but_a_measured_one_does_not():
+    """A followed object measured every frame keeps its target against a one-frame measurement
+    of another object 20 cm away; once the target has gone unmeasured for switch_frames frames
+    (the object was taken away), the next object measured takes over at once."""
+    from icub_pmp.vision.object_tracker import ObjectTracker
+
+    tr = ObjectTracker()
+    a, b = np.array([-0.38, 0.0, -0.03]), np.array([-0.38, 0.2, -0.03])
+    t = 0.0
+    for _ in range(5):
+        t += 1 / 30
+        tr.update(t, _estimate(a), moving=False)
+    t += 1 / 30
+    tg = tr.update(t, _estimate(b), moving=True)
+    assert np.linalg.norm(tg.position - a) < 1e-3 and tg.state == "held"
+    for _ in range(3):
+        t += 1 / 30
+        tg = tr.update(t, None)
+    assert tg.state == "held"
+    t += 1 / 30
+    tg = tr.update(t, _estimate(b), moving=True)
+    assert np.linalg.norm(tg.position - b) < 1e-3 and tg.state in ("moving", "still")

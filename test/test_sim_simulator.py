@@ -109,6 +109,45 @@ def test_object_pose_and_errors(sim):
                                sim.config.cylinder_position, atol=1e-9)
 
 
+def test_move_object_follows_simulated_time_and_stops_at_rest(sim):
+    """move_object slides the cylinder on the table at its velocity in simulated time: at every
+    step it is where start + v t says (within 1 mm), it stops at start + v duration and stays
+    there at rest; a teleport ends a motion at once; a bad velocity, duration or end pose is
+    refused and nothing moves."""
+    sim.reset("rest")
+    sim.set_object_pose("box", [-0.52, -0.40, -0.05])  # off the cylinder's way
+    start, v = np.array([-0.44, -0.10, -0.03]), np.array([0.05, 0.20, 0.0])
+    t0, t1 = sim.move_object("cylinder", start, v, 0.5)
+    assert t0 == pytest.approx(sim.time) and t1 == pytest.approx(t0 + 0.5)
+    for _ in range(10):
+        sim.step(37)
+        s = min(sim.time - t0, 0.5)
+        np.testing.assert_allclose(sim.object_pose("cylinder").position, start + v * s,
+                                   atol=1e-3)
+    sim.step(500)
+    end = sim.object_pose("cylinder").position
+    np.testing.assert_allclose(end, start + v * 0.5, atol=2e-3)
+    sim.step(300)
+    np.testing.assert_allclose(sim.object_pose("cylinder").position, end, atol=1e-4)
+    # a teleport ends the motion
+    sim.move_object("cylinder", start, v, 0.5)
+    sim.set_object_pose("cylinder", start)
+    sim.step(200)
+    np.testing.assert_allclose(sim.object_pose("cylinder").position, start, atol=2e-3)
+    p0 = sim.object_pose("cylinder").position
+    for velocity, duration, match in (([0.0, np.nan, 0.0], 1.0, "velocity"),
+                                      ([0.0, 0.1], 1.0, "velocity"),
+                                      ([0.0, 0.1, 0.0], 0.0, "duration"),
+                                      ([0.0, 0.1, 0.0], 1e3, "duration"),
+                                      ([0.0, 0.0, -1.0], 1.0, "below the floor")):
+        with pytest.raises(InvalidInput, match=match):
+            sim.move_object("cylinder", start, velocity, duration)
+    with pytest.raises(UnknownName):
+        sim.move_object("ball", start, v, 0.5)
+    sim.step(100)
+    np.testing.assert_allclose(sim.object_pose("cylinder").position, p0, atol=1e-3)
+
+
 def test_apply_wrench_moves_object_and_validates(sim):
     """A scripted upward force larger than the box's weight lifts it; bad targets, NaN and
     non-positive durations are rejected."""

@@ -324,13 +324,15 @@ class DemoRunner:
 
     def wait_ready(self, timeout: float = 180.0,
                    services: tuple[str, ...] = ("/pmp/reach", "/cartesian/go_to_pose",
-                                                "/sim/set_object_pose", "/gaze/look_at")
+                                                "/sim/set_object_pose", "/sim/move_object",
+                                                "/gaze/look_at")
                    ) -> None:
         """Wait for joint states, clock, objects and the ``services`` of the demo."""
-        from icub_interfaces.srv import GoToPose, LookAt, Reach, SetObjectPose
+        from icub_interfaces.srv import GoToPose, LookAt, MoveObject, Reach, SetObjectPose
 
         types = {"/pmp/reach": Reach, "/cartesian/go_to_pose": GoToPose,
-                 "/sim/set_object_pose": SetObjectPose, "/gaze/look_at": LookAt}
+                 "/sim/set_object_pose": SetObjectPose, "/sim/move_object": MoveObject,
+                 "/gaze/look_at": LookAt}
         ok = self.probe.wait_for(
             lambda: all(k in self.latest for k in ("js", "clock", "box", "cylinder")), timeout)
         if not ok:
@@ -490,18 +492,28 @@ class DemoRunner:
         return result
 
     def move_object(self, name: str, start: np.ndarray, velocity: np.ndarray,
-                    duration: float, rate: float = 60.0) -> None:
-        """Move an object at constant ``velocity`` [m/s] for ``duration`` s of sim time."""
-        t0 = self.sim_time()
-        k = 0
-        while True:
-            t = k / rate
-            if t > duration:
-                break
-            self.set_object(name, start + velocity * t)
-            k += 1
-            t_next = t0 + k / rate
-            self.probe.wait_for(lambda t_next=t_next: self.sim_time() >= t_next, 60.0)
+                    duration: float) -> tuple[float, float]:
+        """Move an object from ``start`` [m] at constant ``velocity`` [m/s] for ``duration`` s
+        of simulated time (/sim/move_object: the simulator moves it step by step, so the
+        motion is the same at any load) and wait until it has stopped. Returns the simulated
+        times [s] of the motion's start and end."""
+        from icub_interfaces.srv import MoveObject
+
+        req = MoveObject.Request()
+        req.name = name
+        req.pose.position.x, req.pose.position.y, req.pose.position.z = (
+            float(v) for v in start)
+        req.pose.orientation.w = 1.0
+        req.velocity.x, req.velocity.y, req.velocity.z = (float(v) for v in velocity)
+        req.duration = float(duration)
+        res = self.probe.call("/sim/move_object", MoveObject, req, timeout=30.0)
+        if not res.success:
+            raise RuntimeError(f"move_object {name}: {res.message}")
+        t0, t1 = time_to_sec(res.start), time_to_sec(res.end)
+        if not self.probe.wait_for(lambda: self.sim_time() >= t1, 300.0):
+            raise TimeoutError(f"move_object {name}: the simulation did not reach the end of "
+                               f"the motion (t = {t1:.3f} s) in 300 s")
+        return t0, t1
 
 
 def run_demo(out_dir: Path, quick: bool = False, realism: str | None = None,
@@ -747,16 +759,14 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     runner.wait_sim(0.3)
     runner.set_tracking(True)
     runner.estimates.clear()
-    t0 = runner.sim_time()
-    runner.move_object("cylinder", start, velocity, duration)
-    # the motion ends when its last pose is set: on a loaded machine each /sim/set_object_pose
-    # takes more than its 1/60 s of simulated time, so later than t0 + duration (a still
-    # target between two late steps is not the stopped cylinder)
-    est = wait_still_target(runner, max(t0 + duration, runner.sim_time()))
+    # the simulator moves the cylinder in simulated time: it stops at exactly t_end
+    t0, t_end = runner.move_object("cylinder", start, velocity, duration)
+    est = wait_still_target(runner, t_end)
     if est is None:
         runner.set_tracking(False)
         return PhaseResult(name, False, "no still stereo target of the cylinder after it "
-                           "stopped (/motion/target/estimate)", sim_start=t0)
+                           "stopped (/motion/target/estimate)", sim_start=t0,
+                           extra={"motion_s": t_end - t0})
     stamp = time_to_sec(est.header.stamp)
     first = min((time_to_sec(m.header.stamp) for m in list(runner.estimates)),
                 default=stamp)
@@ -787,6 +797,7 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
         "first_target_after_motion_s": first - t0,
         "via_points": float(len(points) - 1),
         "goal_sent_s": goal_sent,
+        "motion_s": t_end - t0,
     })
     vr.success = bool(vr.success and ok)
     vr.message = f"{message} ({vr.message})"

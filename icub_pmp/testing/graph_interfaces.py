@@ -61,6 +61,7 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
         GoToPose,
         Grasp,
         LookAt,
+        MoveObject,
         PlanPair,
         Reach,
         ResetSim,
@@ -75,6 +76,7 @@ def services(scale: float = 1.0) -> list[FuzzTarget]:
     return [
         FuzzTarget("/sim/reset", ResetSim, ("sim_bridge",), 10.0, n(6)),
         FuzzTarget("/sim/set_object_pose", SetObjectPose, ("sim_bridge",), 10.0, n(12)),
+        FuzzTarget("/sim/move_object", MoveObject, ("sim_bridge",), 10.0, n(8)),
         FuzzTarget("/sim/apply_wrench", ApplyWrench, ("sim_bridge",), 10.0, n(12)),
         FuzzTarget("/sim/set_paused", SetBool, ("sim_bridge",), 10.0, n(4)),
         # no cubes in the fuzzed scene: every grasp is refused by name, the node answers

@@ -7,11 +7,15 @@ of the images it was measured in (``stamp``), and a constant-velocity model foll
 object without the lag of an exponential smoother.
 
 The motion segmenter sees an object only while it moves; the node then measures it in its own
-image region (still measurements, ``moving=False``), which here also sets its velocity to zero.
+image region (still measurements, ``moving=False``), which here also sets its velocity to zero;
+a still measurement inconsistent with the prediction (beyond :data:`JUMP_CHI2`, within
+``track_gate``) restarts the target there: the object was moved without being seen moving, and
+averaging its old and new places would leave the target between them for many frames.
 Without any measurement the target is held where it was last measured (an object that nobody
 sees moving stays where it is) for ``hold_time``. A measurement farther than ``track_gate``
 from the target is another object: it takes over only after ``switch_frames`` measurements in a
-row near each other.
+row near each other, or at once when the target itself has not been measured for
+``switch_frames`` frames (a stale target, e.g. of an object taken away, must not hide the next).
 """
 
 from __future__ import annotations
@@ -25,7 +29,12 @@ from icub_pmp.errors import InvalidInput
 from icub_pmp.vision.object_locator import ObjectEstimate
 from icub_pmp.vision.stereo_target_config import StereoTargetConfig
 
-__all__ = ["ObjectTracker", "TrackedObject", "TRACK_STATES"]
+__all__ = ["ObjectTracker", "TrackedObject", "TRACK_STATES", "JUMP_CHI2"]
+
+#: a still measurement this far from the prediction (squared Mahalanobis distance; the chi-square
+#: quantile 0.999 of 3 degrees of freedom) restarts the target there: the object was moved
+#: without being seen moving (a jump, a stop that the prediction overshot)
+JUMP_CHI2 = 16.27
 
 #: ``moving`` (measured, seen moving), ``still`` (measured, not moving), ``held`` (not measured
 #: this frame), ``none`` (no target).
@@ -152,13 +161,19 @@ class ObjectTracker:
             else:
                 self._candidate_frames = 1
             self._candidate = z
-            if self._candidate_frames >= c.switch_frames:
+            # a target that has not been measured for switch_frames frames (its region shows
+            # nothing: the object was taken away) gives way at once
+            if self._candidate_frames >= c.switch_frames or self._misses >= c.switch_frames:
                 self._start(stamp, measurement, moving)
             else:
                 self._misses += 1
                 self._publish(stamp, "held")
             return self._target
         self._candidate, self._candidate_frames, self._misses = None, 0, 0
+        if not moving and self._jumped(z, measurement.covariance):
+            # measured at rest where the target cannot be: moved without being seen moving
+            self._start(stamp, measurement, moving)
+            return self._target
         if not moving:
             self._x[3:] = 0.0
             self._P[3:, 3:] = np.eye(3) * 1e-6
@@ -187,6 +202,17 @@ class ObjectTracker:
         self._t = stamp
         self._candidate, self._candidate_frames, self._misses = None, 0, 0
         self._publish(stamp, "moving" if moving else "still")
+
+    def _jumped(self, z: np.ndarray, R: np.ndarray) -> bool:
+        """The still measurement ``z`` (3,) [m] with covariance ``R`` is inconsistent with the
+        predicted position (squared Mahalanobis distance beyond :data:`JUMP_CHI2`)."""
+        S = self._P[:3, :3] + np.asarray(R, float)
+        e = z - self._x[:3]
+        try:
+            d2 = float(e @ np.linalg.solve(S, e))
+        except np.linalg.LinAlgError:
+            return False
+        return d2 > JUMP_CHI2
 
     def _predict(self, stamp: float) -> None:
         dt = stamp - self._t

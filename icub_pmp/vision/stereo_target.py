@@ -35,6 +35,8 @@ from icub_pmp.vision.stereo_target_config import StereoTargetConfig
 __all__ = ["StereoTarget", "StereoTargetResult"]
 
 _MAX_PAIRS = 2  # pairs measured per frame (CPU bound)
+_RECENTRE = 3  # re-centred region measurements per frame at most
+_RECENTRE_TOLERANCE = 0.002  # a re-centred measurement that moved less than this is done [m]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,11 +116,9 @@ class StereoTarget:
             break
         moving = source == "motion"
         if source != "motion" and target.valid:
-            seed = ObjectLocator.seed_from_object(target.top, target.radius, target.height,
-                                                  poses.T_root_left, self.left)
-            gate = ObjectGate(target.top, target.radius, max(0.015, 2.0 * self._sigma(target)))
             try:
-                m = self.locator.locate(rect, left, right, seed, points_fn, gate)
+                m, seed = self._region(rect, left, right, target, poses, points_fn,
+                                       self_segments)
                 meas, source = m, "region"
                 moving = bool(np.any(blobs_left.mask[seed] > 0)) and \
                     float(np.mean(blobs_left.mask[seed] > 0)) > 0.1
@@ -130,6 +130,54 @@ class StereoTarget:
         tracked = self.tracker.update(stamp, meas, moving)
         return StereoTargetResult(tracked, meas if source != "none" else None, source, pairs,
                                   "" if meas is not None else "; ".join(notes))
+
+    def _region(self, rect: StereoRectification, left: np.ndarray, right: np.ndarray,
+                target: TrackedObject, poses: CameraPoses, points_fn: PointsFn | None,
+                self_segments: np.ndarray | None) -> tuple[ObjectEstimate, np.ndarray]:
+        """Measure the followed object in its own image region: (the measurement, the left
+        seed mask it was measured in).
+
+        The object is still there without motion, but it may have moved since it was last
+        measured without the segmenter seeing it move (a stop the prediction overshot, a small
+        jump): the region measured within ``2 sigma`` (at least 1.5 cm) of the target is
+        re-centred on what it found until it no longer moves (the gate cut the object's side
+        that lies beyond it, so a measurement that moved is biased towards the old place);
+        when nothing is found there, the object is looked for within ``track_gate`` of the
+        target (not on the robot's own arm) and re-centred the same way.
+
+        Raises:
+            ObjectNotFound: no object there.
+        """
+        c = self.config
+        tight = max(0.015, 2.0 * self._sigma(target))
+
+        def measure(top: np.ndarray, radius: float, height: float, margin: float
+                    ) -> tuple[ObjectEstimate, np.ndarray]:
+            seed = ObjectLocator.seed_from_object(top, radius, height, poses.T_root_left,
+                                                  self.left, margin=max(0.01, margin - tight))
+            gate = ObjectGate(top, radius, margin)
+            return self.locator.locate(rect, left, right, seed, points_fn, gate), seed
+
+        try:
+            m, seed = measure(target.top, target.radius, target.height, tight)
+        except ObjectNotFound:
+            if c.track_gate <= tight:
+                raise
+            m, seed = measure(target.top, target.radius, target.height, c.track_gate)
+            if self._is_self(m, self_segments):
+                raise ObjectNotFound("self", "only the robot's own arm near the target") \
+                    from None
+        if np.linalg.norm(m.top - target.top) >= 0.5 * tight:
+            for _ in range(_RECENTRE):
+                try:
+                    m2, seed2 = measure(m.top, m.radius, m.height, tight)
+                except ObjectNotFound:
+                    break
+                moved = float(np.linalg.norm(m2.top - m.top))
+                m, seed = m2, seed2
+                if moved < _RECENTRE_TOLERANCE:
+                    break
+        return m, seed
 
     def _is_self(self, m: ObjectEstimate, segments: np.ndarray | None) -> bool:
         if segments is None or len(segments) == 0:
