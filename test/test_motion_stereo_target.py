@@ -265,3 +265,41 @@ def test_a_stale_target_gives_way_to_the_next_object_but_a_measured_one_does_not
     t += 1 / 30
     tg = tr.update(t, _estimate(b), moving=True)
     assert np.linalg.norm(tg.position - b) < 1e-3 and tg.state in ("moving", "still")
+
+
+def test_a_target_whose_place_is_seen_empty_is_dropped_and_the_next_object_taken(scene):
+    """The cylinder slides and stops (a still target), then is taken away between two images
+    (the bench's next trial puts it elsewhere): both eyes see its place empty, and the target
+    is dropped after ``empty_hold_time`` (1 s; before, it was held for ``hold_time``, 30 s,
+    and the gaze kept looking at the empty place); the cylinder then slides in at a place
+    12 cm away and becomes the target, followed within 10 mm."""
+    seg = {s: MotionSegmenter() for s in ("left", "right")}
+    target = StereoTarget(left=scene.camera)
+    box = [-0.52, -0.40, -0.05]
+    away = np.array([-0.9, 0.6, -0.03])  # off the table, out of both eyes' view
+    start, vel = np.array([-0.38, -0.08, -0.03]), np.array([0.0, 0.2, 0.0])
+    states, dropped_at, errs = [], None, []
+    for k in range(120):
+        t = k / 30.0
+        if t < 1.0:
+            centre = start + vel * min(max(t - 0.1, 0.0), 0.5)
+        elif t < 2.6:
+            centre = away
+        else:
+            centre = np.array([-0.40, -0.02, -0.03]) + vel * min(t - 2.6, 0.5)
+        scene.pose(LOOK_DOWN, {"cylinder": centre, "box": box})
+        f = scene.render()
+        rl, rr = seg["left"].process(f.left), seg["right"].process(f.right)
+        tg = target.process(t, f.left, f.right, rl, rr, f.poses).target
+        states.append(tg.state)
+        if 0.8 <= t < 1.0:
+            assert tg.valid and tg.state == "still"
+        if 1.0 <= t < 2.6 and dropped_at is None and not tg.valid:
+            dropped_at = t
+        if 1.0 <= t < 2.6 and dropped_at is not None:
+            assert not tg.valid  # nothing is there to take over
+        if t >= 3.0:
+            assert tg.valid, (k, tg.state)
+            errs.append(np.linalg.norm(tg.position - centre))
+    assert dropped_at is not None and 1.9 <= dropped_at <= 2.3, (dropped_at, states[30:70])
+    assert max(errs) < 0.010, np.round(np.array(errs) * 1000, 1)

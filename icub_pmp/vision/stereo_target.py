@@ -21,7 +21,8 @@ import dataclasses
 
 import numpy as np
 
-from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics
+from icub_pmp.errors import InvalidInput
+from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, project_point
 from icub_pmp.peripersonal.segment_distance import segment_distance
 from icub_pmp.vision.blob_pairing import BlobPair, BlobPairing
 from icub_pmp.vision.exceptions import ObjectNotFound
@@ -70,10 +71,12 @@ class StereoTarget:
         self.pairing = BlobPairing(self.config)
         self.locator = ObjectLocator(self.config)
         self.tracker = ObjectTracker(self.config)
+        self._empty_since: float | None = None  # the target's place seen empty since [s]
 
     def reset(self) -> None:
         """Drop the target."""
         self.tracker.reset()
+        self._empty_since = None
 
     def process(self, stamp: float, left: np.ndarray, right: np.ndarray, blobs_left: MotionBlobs,
                 blobs_right: MotionBlobs, poses: CameraPoses,
@@ -124,6 +127,11 @@ class StereoTarget:
                     float(np.mean(blobs_left.mask[seed] > 0)) > 0.1
             except ObjectNotFound as exc:
                 notes.append(f"region: {exc}")
+                if self._place_is_empty(stamp, exc, target, poses):
+                    notes.append("the target's place is in view and empty: target dropped")
+                    self.tracker.reset()
+        if source != "none":
+            self._empty_since = None
         if meas is not None and source == "none":
             source = "motion"  # another object, as a candidate for the tracker
             moving = True
@@ -178,6 +186,37 @@ class StereoTarget:
                 if moved < _RECENTRE_TOLERANCE:
                     break
         return m, seed
+
+    def _place_is_empty(self, stamp: float, exc: ObjectNotFound, target: TrackedObject,
+                        poses: CameraPoses) -> bool:
+        """Whether the target's place has been seen empty for ``empty_hold_time``: both eyes
+        see all of it (its top and bottom project inside both images) and the region
+        measurement found nothing standing there (``no_object``: not the robot's own arm,
+        which may hide the object, nor a measurement that failed for another reason). A
+        target held that way would keep the gaze on an empty place for ``hold_time``
+        (docs/decisions/0058)."""
+        if exc.reason != "no_object" or not self._in_view(target, poses):
+            self._empty_since = None
+            return False
+        if self._empty_since is None:
+            self._empty_since = stamp
+        if stamp - self._empty_since >= self.config.empty_hold_time:
+            self._empty_since = None
+            return True
+        return False
+
+    def _in_view(self, target: TrackedObject, poses: CameraPoses) -> bool:
+        """Both eyes see the target's top and bottom centre inside their images."""
+        bottom = target.top - np.array([0.0, 0.0, target.height])
+        for T, cam in ((poses.T_root_left, self.left), (poses.T_root_right, self.right)):
+            for p in (target.top, bottom):
+                try:
+                    u, v = project_point(T, p, cam)
+                except InvalidInput:  # behind the camera
+                    return False
+                if not (0.0 <= u < cam.width and 0.0 <= v < cam.height):
+                    return False
+        return True
 
     def _is_self(self, m: ObjectEstimate, segments: np.ndarray | None) -> bool:
         if segments is None or len(segments) == 0:

@@ -61,6 +61,9 @@ class StereoTargetConfig(ConfigBase):
         still_frames: frames without a measurement after which a held target's velocity is
             zeroed (nobody sees it move: it stays) [-].
         hold_time: a target without any measurement is dropped after this [s].
+        empty_hold_time: a target whose place both eyes see, with nothing there to measure
+            (the object was taken away), is dropped after this [s] (``hold_time`` is for a
+            place out of view or hidden by the robot's arm).
         switch_frames: frames another object must be measured, away from a followed one, to
             take over [-].
         position_noise: process noise of the constant-velocity tracker, as the standard
@@ -101,6 +104,7 @@ class StereoTargetConfig(ConfigBase):
     still_speed: float = 0.02
     still_frames: int = 3
     hold_time: float = 30.0
+    empty_hold_time: float = 1.0
     switch_frames: int = 3
     position_noise: float = 3.0
     self_radius: float = 0.07
@@ -150,6 +154,8 @@ class StereoTargetConfig(ConfigBase):
             raise bad("still_speed", ">= 0 m/s")
         if self.hold_time <= 0.0:
             raise bad("hold_time", "> 0 s")
+        if self.empty_hold_time <= 0.0:
+            raise bad("empty_hold_time", "> 0 s")
         for f in ("stereo_sync_tolerance", "joint_state_timeout"):
             if getattr(self, f) < 0.0:
                 raise bad(f, ">= 0 s")
