@@ -267,6 +267,40 @@ def test_a_stale_target_gives_way_to_the_next_object_but_a_measured_one_does_not
     assert np.linalg.norm(tg.position - b) < 1e-3 and tg.state in ("moving", "still")
 
 
+def test_an_object_seen_moving_takes_over_from_a_still_target_only_if_it_persists():
+    """A still target measured at rest every frame (a still object, maybe a wrong one) keeps
+    the target against another object seen moving 20 cm away for switch_frames - 1 frames;
+    seen moving switch_frames frames in a row, that object becomes the target (the robot
+    attends to what moves: the vision bench's wrong targets were a still object that kept a
+    new moving cylinder from ever taking over); a moving target is not taken over."""
+    from icub_pmp.vision.object_tracker import ObjectTracker
+
+    tr = ObjectTracker()
+    a, b = np.array([-0.38, 0.0, -0.03]), np.array([-0.38, 0.2, -0.03])
+    t = 0.0
+    for _ in range(5):
+        t += 1 / 30
+        tr.update(t, _estimate(a), moving=False)
+    n = tr.config.switch_frames
+    for _ in range(n - 1):
+        t += 1 / 30
+        tg = tr.update(t, _estimate(a), moving=False, other=_estimate(b))
+        assert np.linalg.norm(tg.position - a) < 1e-3 and tg.state == "still"
+    t += 1 / 30
+    tr.update(t, _estimate(a), moving=False)  # the other one not seen: the count restarts
+    for _ in range(n - 1):
+        t += 1 / 30
+        tg = tr.update(t, _estimate(a), moving=False, other=_estimate(b))
+    assert np.linalg.norm(tg.position - a) < 1e-3
+    t += 1 / 30
+    tg = tr.update(t, _estimate(a), moving=False, other=_estimate(b))
+    assert np.linalg.norm(tg.position - b) < 1e-3 and tg.state == "moving"
+    for _ in range(n + 2):  # now b is the target and moves: a still object does not take over
+        t += 1 / 30
+        tg = tr.update(t, _estimate(b), moving=True, other=_estimate(a))
+    assert np.linalg.norm(tg.position - b) < 0.01
+
+
 def test_a_target_whose_place_is_seen_empty_is_dropped_and_the_next_object_taken(scene):
     """The cylinder slides and stops (a still target), then is taken away between two images
     (the bench's next trial puts it elsewhere): both eyes see its place empty, and the target

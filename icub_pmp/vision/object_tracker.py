@@ -115,7 +115,7 @@ class ObjectTracker:
         return self._target
 
     def update(self, stamp: float, measurement: ObjectEstimate | None,
-               moving: bool = True) -> TrackedObject:
+               moving: bool = True, other: ObjectEstimate | None = None) -> TrackedObject:
         """Advance to ``stamp`` [s] with this frame's measurement (None: not measured).
 
         Args:
@@ -125,6 +125,11 @@ class ObjectTracker:
             measurement: the object measured in this frame's images.
             moving: the measurement comes from motion blobs (False: the object was measured in
                 its own region without motion, so it is still).
+            other: another object seen moving this frame, beyond ``track_gate`` of the target
+                (while ``measurement`` is the target's own): it takes over once seen moving
+                ``switch_frames`` frames in a row, even from a target measured at rest (the
+                robot attends to what moves; a still object taken for the target, or one that
+                was the target and stopped, must not hide a new motion).
 
         Raises:
             InvalidInput: ``stamp`` is not finite.
@@ -169,7 +174,19 @@ class ObjectTracker:
                 self._misses += 1
                 self._publish(stamp, "held")
             return self._target
-        self._candidate, self._candidate_frames, self._misses = None, 0, 0
+        self._misses = 0
+        if other is not None and not moving:
+            o = np.asarray(other.position, float)
+            if self._candidate is not None and np.linalg.norm(o - self._candidate) <= c.track_gate:
+                self._candidate_frames += 1
+            else:
+                self._candidate_frames = 1
+            self._candidate = o
+            if self._candidate_frames >= c.switch_frames:
+                self._start(stamp, other, True)
+                return self._target
+        else:
+            self._candidate, self._candidate_frames = None, 0
         if not moving and self._jumped(z, measurement.covariance):
             # measured at rest where the target cannot be: moved without being seen moving
             self._start(stamp, measurement, moving)

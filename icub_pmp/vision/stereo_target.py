@@ -98,6 +98,7 @@ class StereoTarget:
         target = self.tracker.target
         notes = []
         meas: ObjectEstimate | None = None
+        other: ObjectEstimate | None = None  # another object seen moving, far from the target
         source = "none"
         for p in pairs[:_MAX_PAIRS]:
             seed = _blob_seed(blobs_left, p.left)
@@ -112,8 +113,8 @@ class StereoTarget:
             if target.valid and np.linalg.norm(m.position - target.position) \
                     > self.config.track_gate:
                 notes.append(f"pair {p.left}/{p.right}: another object")
-                if meas is None:
-                    meas = m  # kept only if the target cannot be measured in its region
+                if other is None:
+                    other = m
                 continue
             meas, source = m, "motion"
             break
@@ -132,10 +133,11 @@ class StereoTarget:
                     self.tracker.reset()
         if source != "none":
             self._empty_since = None
-        if meas is not None and source == "none":
-            source = "motion"  # another object, as a candidate for the tracker
+        if meas is None and other is not None:
+            meas, other, source = other, None, "motion"  # another object, a candidate
             moving = True
-        tracked = self.tracker.update(stamp, meas, moving)
+        tracked = self.tracker.update(stamp, meas, moving,
+                                      other if source == "region" else None)
         return StereoTargetResult(tracked, meas if source != "none" else None, source, pairs,
                                   "" if meas is not None else "; ".join(notes))
 
