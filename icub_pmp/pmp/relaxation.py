@@ -220,9 +220,7 @@ class Relaxation:
                 new_state = network.evaluate(z_new, s + h)
                 if not network.obstacles:
                     break
-                # a body that starts within the clearance may move out of it
-                clear = new_state.clearance > 0.0 or new_state.clearance >= state.clearance
-                if clear and not (adaptive and _jump(
+                if new_state.clearance > 0.0 and not (adaptive and _jump(
                         state, new_state) > 2.0 * cfg.max_displacement):
                     break
                 h *= 0.5
