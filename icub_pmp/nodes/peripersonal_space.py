@@ -55,6 +55,7 @@ from icub_pmp.peripersonal.peripersonal_node_config import PeripersonalNodeConfi
 from icub_pmp.ros.joint_state_cache import JointStateCache
 from icub_pmp.ros.node_runner import spin_node
 from icub_pmp.ros.parameters import ConfigParameters
+from icub_pmp.ros.trajectory_action_server import FIRST_STATE_TIMEOUT
 
 __all__ = ["PeripersonalSpaceNode", "main"]
 
@@ -285,6 +286,7 @@ class PeripersonalSpaceNode(Node):
             first = _arm(req.first or "left")
             q_start: dict[str, float] | None = None
             if req.from_current:
+                self._listener.wait_for_first(FIRST_STATE_TIMEOUT)  # a call right after start-up
                 js = self._listener.latest()
                 if js is None:
                     raise InvalidInput("from_current: no /joint_states received yet (is "
