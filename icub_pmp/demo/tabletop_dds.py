@@ -11,7 +11,7 @@ round, wrists frozen, trunk still), the grasp and release through ``/sim/grasp``
 arm to the ``park`` posture's hand position by PMP. Judged on the ground-truth topics
 (``/ground_truth/self_contacts``, ``/ground_truth/object_contacts``, the cubes' poses); time
 is ``/clock``. :func:`execute_over_dds` is the phase a demo can call with its
-:class:`~icub_pmp.demo.scenario.DemoRunner`.
+:class:`~icub_pmp.demo.demo_runner.DemoRunner`.
 
 Where the cubes are: the iCub has no object perception in this graph, so every grasp and
 carry is aimed from the cube's pose on the simulator's ``/ground_truth/objects/<cube>`` topic
@@ -213,7 +213,7 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
                      pair_check: ServicePairCheck | None = None, verbose: bool = False
                      ) -> dict:
     """Execute ``plan`` through the running graph (module doc) with ``runner`` (a
-    :class:`~icub_pmp.demo.scenario.DemoRunner`); returns the report as
+    :class:`~icub_pmp.demo.demo_runner.DemoRunner`); returns the report as
     :meth:`TaskReport.as_dict` has it, with ``replans`` (rounds whose mode the check from the
     measured postures changed), ``grasp_retries``, ``reaims`` (goals out of reach sent again
     to the closest points the arms reach) and ``trace`` (after each goal: targets,
@@ -414,7 +414,7 @@ def _one_line(run: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line (module doc)."""
-    from icub_pmp.demo.scenario import DemoRunner
+    from icub_pmp.demo.demo_runner import DemoRunner
     from icub_pmp.demo.tabletop import SCENE, WRISTS, _markdown, _space, plan_summary
     from icub_pmp.graph import NodeGraph, reserve_domain_id, ros_environment
     from icub_pmp.ros.probe import RosProbe
