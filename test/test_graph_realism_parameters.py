@@ -33,3 +33,47 @@ def test_given_parameters_win_and_are_not_changed():
 def test_an_unknown_preset_is_refused_by_name():
     with pytest.raises(ValueError, match="real"):
         realism_parameters("real")
+
+
+@pytest.mark.parametrize("preset", ["ideal", "icub"])
+def test_each_preset_survives_the_command_line(preset, ros_domain_id):
+    """The preset's parameters given as ``-p NAME:=VALUE`` (how NodeGraph and NodeProcess
+    start nodes) reach a node with their type and value: the ideal preset's empty
+    ``eye_calibration_file`` was a parse error of rcl before it was quoted."""
+    import rclpy
+    from rclpy.context import Context
+
+    from icub_pmp.graph import param_text
+
+    for node_name, values in realism_parameters(preset).items():
+        args = ["--ros-args"] + [a for k, v in values.items()
+                                 for a in ("-p", f"{k}:={param_text(v)}")]
+        ctx = Context()
+        rclpy.init(args=args, context=ctx)
+        try:
+            node = rclpy.create_node(node_name, context=ctx,
+                                     automatically_declare_parameters_from_overrides=True)
+            got = {k: node.get_parameter(k).value for k in values}
+            node.destroy_node()
+        finally:
+            rclpy.shutdown(context=ctx)
+        assert got == values
+
+
+@pytest.mark.parametrize("text", ["", "true", "1.5", "null", "it's", "a: b", " x", "[a]"])
+def test_string_parameters_keep_their_text(text, ros_domain_id):
+    import rclpy
+    from rclpy.context import Context
+
+    from icub_pmp.graph import param_text
+
+    ctx = Context()
+    rclpy.init(args=["--ros-args", "-p", f"s:={param_text(text)}"], context=ctx)
+    try:
+        node = rclpy.create_node("param_text_probe", context=ctx,
+                                 automatically_declare_parameters_from_overrides=True)
+        value = node.get_parameter("s").value
+        node.destroy_node()
+    finally:
+        rclpy.shutdown(context=ctx)
+    assert value == text

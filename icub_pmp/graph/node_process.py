@@ -10,6 +10,8 @@ import time
 from pathlib import Path
 from typing import Sequence
 
+import yaml
+
 from icub_pmp.config import repo_root
 
 __all__ = ["NodeProcess", "param_text"]
@@ -127,4 +129,12 @@ def param_text(v: object) -> str:
         return "true" if v else "false"
     if isinstance(v, (list, tuple)):
         return "[" + ",".join(param_text(x) for x in v) + "]"
+    if isinstance(v, str):
+        # rcl reads the value as YAML: an empty string, or text YAML would read as another
+        # type ("true", "1.5", "null", "[a]"), must be a quoted scalar
+        try:
+            plain = yaml.safe_load(v) == v and "'" not in v
+        except yaml.YAMLError:
+            plain = False
+        return v if plain and v.strip() == v else "'" + v.replace("'", "''") + "'"
     return str(v)
