@@ -272,8 +272,7 @@ class CartesianSolverNode(Node):
 
         feedback("solving", {}, float(req.trajectory_time), 0.0)
         try:
-            self.joint_cache.wait_for_first(FIRST_STATE_TIMEOUT)  # a goal right after start-up
-            if self.joint_cache.latest() is None:
+            if self.joint_cache.latest(wait=FIRST_STATE_TIMEOUT) is None:  # right after start-up
                 raise InvalidInput("no /joint_states received: the robot's posture is "
                                    "unknown, nothing can be executed")
             arrival = arrival_config(self.params.get(ArrivalConfig), req.arrival_tolerance)

@@ -138,11 +138,7 @@ class GazeControllerNode(Node):
         """(time [s], {joint: position [rad]}) of the latest joint states; before the first
         one arrived, waits up to ``wait`` s of wall time for it (a request right after
         start-up, while DDS is still matching the joint-state subscription)."""
-        js = self._listener.latest()
-        deadline = time.monotonic() + wait
-        while js is None and time.monotonic() < deadline:
-            time.sleep(0.02)
-            js = self._listener.latest()
+        js = self._listener.latest(wait=wait)
         if js is None:
             when = f"within {wait:g} s" if wait else "yet"
             raise InvalidInput(f"no /joint_states received {when}: the head posture is unknown "

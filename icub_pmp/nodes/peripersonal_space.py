@@ -286,8 +286,7 @@ class PeripersonalSpaceNode(Node):
             first = _arm(req.first or "left")
             q_start: dict[str, float] | None = None
             if req.from_current:
-                self._listener.wait_for_first(FIRST_STATE_TIMEOUT)  # a call right after start-up
-                js = self._listener.latest()
+                js = self._listener.latest(wait=FIRST_STATE_TIMEOUT)  # right after start-up
                 if js is None:
                     raise InvalidInput("from_current: no /joint_states received yet (is "
                                        "sim_bridge running?)")

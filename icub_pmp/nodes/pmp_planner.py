@@ -165,8 +165,7 @@ class PmpPlannerNode(Node):
     # ------------------------------------------------------------------ joint states
     def _current_state(self) -> dict[str, float] | None:
         timeout = self.node_config.joint_state_timeout
-        self.joint_states.wait_for_first(FIRST_STATE_TIMEOUT)
-        st = self.joint_states.latest()
+        st = self.joint_states.latest(wait=FIRST_STATE_TIMEOUT)  # a goal right after start-up
         if st is None:
             return None
         if timeout > 0 and self.joint_states.wall_age() > timeout:

@@ -127,8 +127,12 @@ class JointStateCache:
         return MeasuredState(m.stamp_ns * 1e-9, dict(zip(m.name, m.position.tolist())),
                              time.monotonic())
 
-    def latest(self) -> MeasuredState | None:
-        """The newest good sample, or None before the first."""
+    def latest(self, wait: float = 0.0) -> MeasuredState | None:
+        """The newest good sample, or None before the first. ``wait`` > 0: before the first
+        sample, wait up to that many seconds of wall time for it (a request right after
+        start-up, while DDS is still matching the subscription)."""
+        if wait > 0.0 and self._data is None:
+            self.wait_for_first(wait)
         with self._lock:
             data, wall = self._data, self._wall
             if data is None or (self._cached is not None and self._cached.wall == wall):
