@@ -128,7 +128,7 @@ def run_demo(out_dir: Path, quick: bool = False, realism: str | None = None,
                 runner.wait_sim(0.5)
                 # the FT offsets, on the still robot before any goal (realism icub: a few N)
                 print(f"demo: {runner.calibrate_estimator()}", flush=True)
-                results = run_phases(runner, quick)
+                run_phases(runner, quick, results)
                 if tabletop:
                     print("demo: phase 7, the tabletop task of the two arms", flush=True)
                     results.append(guarded("tabletop", lambda: tabletop_phase(runner), runner))
@@ -603,9 +603,12 @@ def bimanual_pregrasp(box: np.ndarray) -> dict[str, np.ndarray]:
             "right": box + [0.0, BOX_HALF_WIDTH + PREGRASP_GAP, 0.0]}
 
 
-def run_phases(runner: DemoRunner, quick: bool) -> list[PhaseResult]:
-    """The six phases; a phase that fails does not stop the next one."""
-    results: list[PhaseResult] = []
+def run_phases(runner: DemoRunner, quick: bool,
+               results: list[PhaseResult] | None = None) -> list[PhaseResult]:
+    """The six phases, appended to ``results`` as each ends (so an error of the graph keeps
+    what the earlier phases measured); from phase 3 on a phase that fails or times out does
+    not stop the next one."""
+    results = [] if results is None else results
     box = runner.object_position("box")
     half_w = BOX_HALF_WIDTH
     pre = bimanual_pregrasp(box)
@@ -650,13 +653,15 @@ def run_phases(runner: DemoRunner, quick: bool) -> list[PhaseResult]:
     runner.set_object("box", np.array([-0.52, -0.33, -0.05]))
 
     print("demo: phase 3, the eyes find the moving cylinder, the hand goes above it", flush=True)
-    vr = vision_reach(runner, np.array([-0.36, -0.12, -0.03]), np.array([0.0, 0.2, 0.0]), 1.2)
+    vr = guarded("vision_reach", lambda: vision_reach(
+        runner, np.array([-0.36, -0.12, -0.03]), np.array([0.0, 0.2, 0.0]), 1.2), runner)
     results.append(vr)
     target = np.asarray(vr.targets.get("right", runner.object_position("cylinder") + [0, 0, 0.12]))
     print("demo: phase 4, the same target with the Cartesian solver", flush=True)
     runner.pmp_reach("back", {"right": np.array([-0.22, 0.25, 0.12])}, use_torso=True, tau=1.5,
                      judge_physics=False)
-    results.append(runner.cartesian_reach("cartesian_reach", target))
+    results.append(guarded("cartesian_reach",
+                           lambda: runner.cartesian_reach("cartesian_reach", target), runner))
     print("demo: phase 5, a reach around the cylinder placed on the table", flush=True)
     results.append(guarded("obstacle_reach", lambda: obstacle_reach(runner), runner))
     print("demo: phase 6, the right hand presses on the table with 10 N", flush=True)
