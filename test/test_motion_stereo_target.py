@@ -243,18 +243,25 @@ def _estimate(p) -> "object":
                           p - [0, 0, 0.06], 500, 100, 1.0)
 
 
+def _tracker_on_still_object(a, frames: int = 5) -> tuple["object", float]:
+    """An ObjectTracker that has measured the object at ``a`` at rest ``frames`` frames at
+    30 Hz: (the tracker, the last stamp [s])."""
+    from icub_pmp.vision.object_tracker import ObjectTracker
+
+    tr = ObjectTracker()
+    t = 0.0
+    for _ in range(frames):
+        t += 1 / 30
+        tr.update(t, _estimate(a), moving=False)
+    return tr, t
+
+
 def test_a_stale_target_gives_way_to_the_next_object_but_a_measured_one_does_not():
     """A followed object measured every frame keeps its target against a one-frame measurement
     of another object 20 cm away; once the target has gone unmeasured for switch_frames frames
     (the object was taken away), the next object measured takes over at once."""
-    from icub_pmp.vision.object_tracker import ObjectTracker
-
-    tr = ObjectTracker()
     a, b = np.array([-0.38, 0.0, -0.03]), np.array([-0.38, 0.2, -0.03])
-    t = 0.0
-    for _ in range(5):
-        t += 1 / 30
-        tr.update(t, _estimate(a), moving=False)
+    tr, t = _tracker_on_still_object(a)
     t += 1 / 30
     tg = tr.update(t, _estimate(b), moving=True)
     assert np.linalg.norm(tg.position - a) < 1e-3 and tg.state == "held"
@@ -273,14 +280,8 @@ def test_an_object_seen_moving_takes_over_from_a_still_target_only_if_it_persist
     seen moving switch_frames frames in a row, that object becomes the target (the robot
     attends to what moves: the vision bench's wrong targets were a still object that kept a
     new moving cylinder from ever taking over); a moving target is not taken over."""
-    from icub_pmp.vision.object_tracker import ObjectTracker
-
-    tr = ObjectTracker()
     a, b = np.array([-0.38, 0.0, -0.03]), np.array([-0.38, 0.2, -0.03])
-    t = 0.0
-    for _ in range(5):
-        t += 1 / 30
-        tr.update(t, _estimate(a), moving=False)
+    tr, t = _tracker_on_still_object(a)
     n = tr.config.switch_frames
     for _ in range(n - 1):
         t += 1 / 30

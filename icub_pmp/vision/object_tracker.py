@@ -161,11 +161,7 @@ class ObjectTracker:
         z = np.asarray(measurement.position, float)
         if np.linalg.norm(z - self._x[:3]) > c.track_gate:
             # another object (or a jump): take over only if it persists
-            if self._candidate is not None and np.linalg.norm(z - self._candidate) <= c.track_gate:
-                self._candidate_frames += 1
-            else:
-                self._candidate_frames = 1
-            self._candidate = z
+            self._count_candidate(z)
             # a target that has not been measured for switch_frames frames (its region shows
             # nothing: the object was taken away) gives way at once
             if self._candidate_frames >= c.switch_frames or self._misses >= c.switch_frames:
@@ -176,12 +172,7 @@ class ObjectTracker:
             return self._target
         self._misses = 0
         if other is not None and not moving:
-            o = np.asarray(other.position, float)
-            if self._candidate is not None and np.linalg.norm(o - self._candidate) <= c.track_gate:
-                self._candidate_frames += 1
-            else:
-                self._candidate_frames = 1
-            self._candidate = o
+            self._count_candidate(np.asarray(other.position, float))
             if self._candidate_frames >= c.switch_frames:
                 self._start(stamp, other, True)
                 return self._target
@@ -206,6 +197,16 @@ class ObjectTracker:
         speed = float(np.linalg.norm(self._x[3:]))
         self._publish(stamp, "moving" if moving and speed > c.still_speed else "still")
         return self._target
+
+    def _count_candidate(self, position: np.ndarray) -> None:
+        """Count another object measured at ``position`` (3,) [m]: one more frame in a row if
+        it is within ``track_gate`` of the last candidate, else a new candidate."""
+        if self._candidate is not None and \
+                np.linalg.norm(position - self._candidate) <= self.config.track_gate:
+            self._candidate_frames += 1
+        else:
+            self._candidate_frames = 1
+        self._candidate = position
 
     # ------------------------------------------------------------------ filter
     def _start(self, stamp: float, m: ObjectEstimate, moving: bool) -> None:
