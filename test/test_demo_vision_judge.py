@@ -34,14 +34,21 @@ def test_judge_fails_when_the_hand_ends_5cm_from_the_object():
 
 def test_pre_grasp_goes_over_the_object_not_through_it():
     """From beside and below the top the hand goes through a via point above the goal; from
-    above the goal, far enough aside, it goes straight; the goal is 6 cm above the top."""
+    beside and above the goal too (the fingers hang 4-8 cm below the hand frame: arriving from
+    the side at the goal's height they knocked the cylinder over in the vision bench), and it
+    descends from there; from over the object it goes straight down; the goal is 6 cm above
+    the top."""
     pre = PreGrasp()
     top = CYL + [0.0, 0.0, 0.06]
     low = pre.waypoints(CYL + [0.12, 0.0, 0.0], top, 0.03, 0.12)
     assert len(low) == 2 and low[0][2] >= low[1][2] + 0.079
     assert np.allclose(low[-1], top + [0.0, 0.0, 0.06])
-    high = pre.waypoints(top + [0.0, 0.2, 0.12], top, 0.03, 0.12)
-    assert len(high) == 1
+    for hand in (top + [0.0, 0.2, 0.12], top + [0.14, 0.23, 0.06]):  # beside, above the goal
+        high = pre.waypoints(hand, top, 0.03, 0.12)
+        assert len(high) == 2 and np.allclose(high[0][:2], top[:2])
+        assert high[0][2] >= max(hand[2], high[1][2] + 0.079) - 1e-9
+    over = pre.waypoints(top + [0.01, 0.0, 0.15], top, 0.03, 0.12)
+    assert len(over) == 1 and np.allclose(over[0], top + [0.0, 0.0, 0.06])
 
 
 def _visual_target(t: float, state: str, x: float, points: int = 2000) -> object:
