@@ -243,18 +243,25 @@ def _estimate(p) -> "object":
                           p - [0, 0, 0.06], 500, 100, 1.0)
 
 
+def _tracker_on_still_object(a, frames: int = 5) -> tuple["object", float]:
+    """An ObjectTracker that has measured the object at ``a`` at rest ``frames`` frames at
+    30 Hz: (the tracker, the last stamp [s])."""
+    from icub_pmp.vision.object_tracker import ObjectTracker
+
+    tr = ObjectTracker()
+    t = 0.0
+    for _ in range(frames):
+        t += 1 / 30
+        tr.update(t, _estimate(a), moving=False)
+    return tr, t
+
+
 def test_a_stale_target_gives_way_to_the_next_object_but_a_measured_one_does_not():
     """A followed object measured every frame keeps its target against a one-frame measurement
     of another object 20 cm away; once the target has gone unmeasured for switch_frames frames
     (the object was taken away), the next object measured takes over at once."""
-    from icub_pmp.vision.object_tracker import ObjectTracker
-
-    tr = ObjectTracker()
     a, b = np.array([-0.38, 0.0, -0.03]), np.array([-0.38, 0.2, -0.03])
-    t = 0.0
-    for _ in range(5):
-        t += 1 / 30
-        tr.update(t, _estimate(a), moving=False)
+    tr, t = _tracker_on_still_object(a)
     t += 1 / 30
     tg = tr.update(t, _estimate(b), moving=True)
     assert np.linalg.norm(tg.position - a) < 1e-3 and tg.state == "held"
@@ -267,20 +274,42 @@ def test_a_stale_target_gives_way_to_the_next_object_but_a_measured_one_does_not
     assert np.linalg.norm(tg.position - b) < 1e-3 and tg.state in ("moving", "still")
 
 
+def test_a_held_target_stays_on_its_support_and_stops():
+    """A target followed sliding along the table at 0.2 m/s, then measured once 2 cm low (a
+    part of the object: its top cut by the image's border, the hand over it), and then not
+    measured, is held on its support: no vertical velocity, so it does not sink (the vision
+    bench's held target went 12 cm below the table in 0.2 s and its region search then took
+    another thing), and it stops still_frames frames after the last measurement."""
+    from icub_pmp.vision.object_tracker import ObjectTracker
+
+    tr = ObjectTracker()
+    t = 0.0
+    for _ in range(6):
+        t += 1 / 30
+        tr.update(t, _estimate([-0.38, 0.2 * t, -0.03]), moving=True)
+    t += 1 / 30
+    last = tr.update(t, _estimate([-0.38, 0.2 * t, -0.05]), moving=True)
+    assert abs(last.velocity[2]) < 1e-6 and last.velocity[1] > 0.1
+    held = []
+    for _ in range(10):
+        t += 1 / 30
+        held.append(tr.update(t, None))
+    assert all(h.state == "held" for h in held)
+    z = [h.position[2] for h in held]
+    assert max(z) - min(z) < 1e-6, np.round(np.array(z) * 1000, 1)
+    n = tr.config.still_frames
+    assert np.linalg.norm(held[-1].position - held[n - 1].position) < 1e-9
+    assert np.linalg.norm(held[n - 1].position - last.position) < 0.2 * n / 30 + 0.005
+
+
 def test_an_object_seen_moving_takes_over_from_a_still_target_only_if_it_persists():
     """A still target measured at rest every frame (a still object, maybe a wrong one) keeps
     the target against another object seen moving 20 cm away for switch_frames - 1 frames;
     seen moving switch_frames frames in a row, that object becomes the target (the robot
     attends to what moves: the vision bench's wrong targets were a still object that kept a
     new moving cylinder from ever taking over); a moving target is not taken over."""
-    from icub_pmp.vision.object_tracker import ObjectTracker
-
-    tr = ObjectTracker()
     a, b = np.array([-0.38, 0.0, -0.03]), np.array([-0.38, 0.2, -0.03])
-    t = 0.0
-    for _ in range(5):
-        t += 1 / 30
-        tr.update(t, _estimate(a), moving=False)
+    tr, t = _tracker_on_still_object(a)
     n = tr.config.switch_frames
     for _ in range(n - 1):
         t += 1 / 30

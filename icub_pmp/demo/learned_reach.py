@@ -59,7 +59,7 @@ from icub_pmp.graph import NodeGraph, NodeProcess, param_text, reserve_domain_id
 from icub_pmp.kinematics import IcubModel, RobotSpec
 
 if TYPE_CHECKING:
-    from icub_pmp.demo.scenario import DemoRunner
+    from icub_pmp.demo.demo_runner import DemoRunner
 
 __all__ = ["TARGETS", "OBJECTS", "ObjectMotion", "ReachRecord", "VisionRecord", "body_model",
            "run_reaches", "main"]
@@ -380,7 +380,7 @@ def run_reaches(model_path: Path, targets: np.ndarray, tau: float = 2.0,
     for (the analytic planner's is 0). The cylinder is seen while the first planner runs; the
     second reaches the same estimates with the cylinder put back where it was seen."""
     learned_offset = np.zeros(3) if offset is None else np.asarray(offset, dtype=float)
-    from icub_pmp.demo.scenario import DemoRunner
+    from icub_pmp.demo.demo_runner import DemoRunner
     from icub_pmp.ros.probe import RosProbe
 
     records: list[ReachRecord] = []

@@ -104,7 +104,8 @@ def time_service_calls(service: str, calls: int, timeout: float = 60.0) -> list[
 
 def drive(calls: int) -> dict[str, object]:
     """On the laptop: wait for the graph, time the link, run the demo's phase 1."""
-    from icub_pmp.demo.scenario import DemoRunner, bimanual_pregrasp
+    from icub_pmp.demo.demo_runner import DemoRunner
+    from icub_pmp.demo.scenario import bimanual_pregrasp
     from icub_pmp.ros.probe import RosProbe
 
     rtt = time_service_calls(RTT_SERVICE, calls)

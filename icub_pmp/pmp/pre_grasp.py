@@ -5,8 +5,12 @@ from above). A reach moves the hand about along the straight line from where it 
 force field pulls it straight to the target, Mohan et al. 2009), so a hand that starts below
 the goal or beside the object could sweep through it; the hand then first goes to a via point
 ``lift`` above the goal (at least as high as it already is), and descends to the goal from
-there. The straight path is kept when each of its points is either ``radius`` + ``margin``
-away from the object's axis or at the goal's height above its top.
+there. The straight path is kept when each of its points is ``radius`` + ``margin`` away from
+the object's axis, or when the hand is already over the object (within ``radius`` +
+``margin`` of its axis, at the goal's height or above) and only descends. A hand that arrives
+from the side at the goal's height is not kept: the iCub's fingers hang 4-8 cm below the hand
+frame (docs/decisions/0053), and with the 6 cm clearance they swept the cylinder's top and
+knocked it over (the vision bench's trial 17, docs/decisions/0058).
 """
 
 from __future__ import annotations
@@ -73,8 +77,8 @@ class PreGrasp:
         goal = self.goal(top)
         path = hand + np.linspace(0.0, 1.0, 21)[:, None] * (goal - hand)
         beside = np.linalg.norm(path[:, :2] - top[:2], axis=1) >= radius + c.margin
-        above = path[:, 2] >= goal[2] - 0.005
-        if np.all(beside | above):
+        over = not beside[0] and hand[2] >= goal[2] - 0.005
+        if np.all(beside) or over:
             return goal[None, :]
         via = goal + np.array([0.0, 0.0, c.lift])
         via[2] = max(via[2], hand[2])
