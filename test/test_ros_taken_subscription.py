@@ -15,7 +15,6 @@ from rclpy.qos import qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 
-from icub_pmp.errors import InvalidInput
 from icub_pmp.ros.taken_subscription import TakenSubscription
 
 
@@ -100,33 +99,3 @@ def test_the_executor_leaves_the_messages_to_the_taker(nodes):
     finally:
         executor.shutdown()
         sub.destroy()
-
-
-def test_a_group_wakes_on_any_of_its_subscriptions(nodes):
-    """TakenGroup.wait returns (well before its timeout) once one of its subscriptions has a
-    message, and that message is taken from that subscription only; an empty group is an
-    error."""
-    from icub_pmp.ros.taken_subscription import TakenGroup
-
-    node, pub_node = nodes("taker_group"), nodes("sender_group")
-    subs = [TakenSubscription(node, JointState, f"/taken_group_{k}", qos_profile_sensor_data)
-            for k in range(2)]
-    group = TakenGroup(subs)
-    pubs = [pub_node.create_publisher(JointState, f"/taken_group_{k}", qos_profile_sensor_data)
-            for k in range(2)]
-    try:
-        for p in pubs:
-            _wait_matched(p)
-        pubs[1].publish(JointState(name=["second"]))
-        got = None
-        end = time.monotonic() + 10.0
-        while got is None and time.monotonic() < end:
-            group.wait(30.0)  # returns when the message is there, not after 30 s
-            got = subs[1].take()
-            assert subs[0].take() is None
-        assert got is not None and list(got.name) == ["second"]
-        with pytest.raises(InvalidInput, match="no subscription"):
-            TakenGroup([])
-    finally:
-        for s in subs:
-            s.destroy()

@@ -23,8 +23,6 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.type_support import check_is_valid_msg_type
 
-from icub_pmp.errors import InvalidInput
-
 __all__ = ["TakenSubscription", "TakenGroup"]
 
 
@@ -71,7 +69,7 @@ class TakenGroup:
 
     def __init__(self, subs: Sequence[TakenSubscription]):
         if not subs:
-            raise InvalidInput("TakenGroup: no subscription given (expected at least one)")
+            raise ValueError("TakenGroup: no subscription given")
         self.subs = tuple(subs)
         self._wait_set = _rclpy.WaitSet(len(self.subs), 0, 0, 0, 0, 0, self.subs[0].context)
 
