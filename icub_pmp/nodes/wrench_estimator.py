@@ -19,11 +19,6 @@ services   ~/calibrate (std_srvs/Trigger): FT offset calibration from the last
            within ``calibrate_at_startup_within`` s of the start (never later: a still arm
            then may be a pushed one; an error in the log says to call ~/calibrate)
 
-Threads: a worker thread takes /joint_states and the two arm FT wrenches itself
-(:class:`~icub_pmp.ros.taken_subscription.TakenSubscription`, no executor dispatch per 1 kHz
-message) and processes them; the executor (main thread) serves ~/calibrate, the parameters
-and /imu; the two share the estimator under a lock.
-
 Time: the estimator works on message stamps only (no clock, ``use_sim_time`` not needed: it
 saves deserialising /clock at 1 kHz). Synchronisation: with ``require_same_stamp`` (lockstep
 with the simulator) a sample is processed when the joint state and both arm FT wrenches with
@@ -47,8 +42,6 @@ state is lost).
 from __future__ import annotations
 
 import math
-import threading
-from typing import Callable
 
 import numpy as np
 from geometry_msgs.msg import WrenchStamped
@@ -76,7 +69,6 @@ from icub_pmp.ros.raw_messages import (
     raw_wrench_stamped,
     read_joint_state,
 )
-from icub_pmp.ros.taken_subscription import TakenGroup, TakenSubscription
 from icub_pmp.ros.warning_throttle import WarningThrottle
 from icub_pmp.time_jump_detector import TimeJumpDetector
 
@@ -134,15 +126,13 @@ class WrenchEstimatorNode(Node):
         self._pred_writer = {h: RawWrenchStampedWriter(_FT_TOPIC[h]) for h in HANDS}
         self._bool = {h: Bool() for h in HANDS}
 
-        # the 1 kHz inputs, raw (the stamp is read from the CDR bytes and only the samples
-        # that are processed get deserialised), are taken by the worker thread itself
-        # (:meth:`run`: no executor dispatch per message, docs/decisions/0065); the executor
-        # serves the service, the parameters and /imu, under ``_lock`` with the worker
-        self._lock = threading.Lock()
-        self._js_sub = TakenSubscription(self, JointState, "/joint_states", sd, raw=True)
-        self._ft_subs = {h: TakenSubscription(self, WrenchStamped, f"/ft/{_FT_TOPIC[h]}", sd,
-                                              raw=True) for h in HANDS}
-        self._inputs = TakenGroup([self._js_sub, *self._ft_subs.values()])
+        # raw subscriptions: the stamp is read from the CDR bytes and only the samples that
+        # are processed get deserialised (sample_every > 1 then costs little)
+        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd,
+                                 raw=True)
+        for h in HANDS:
+            self.create_subscription(WrenchStamped, f"/ft/{_FT_TOPIC[h]}",
+                                     lambda m, h=h: self._on_ft(h, m), sd, raw=True)
         self._imu_sub = None
         self._update_imu_subscription(self.config)
         self.create_service(Trigger, "~/calibrate", self._srv_calibrate)
@@ -162,10 +152,6 @@ class WrenchEstimatorNode(Node):
 
     def _on_config_change(self, old: WrenchEstimatorConfig, new: WrenchEstimatorConfig,
                           changed: frozenset[str]) -> None:
-        with self._lock:
-            self._apply_config(new, changed)
-
-    def _apply_config(self, new: WrenchEstimatorConfig, changed: frozenset[str]) -> None:
         if changed <= _LIVE:
             self.estimator.apply_live_config(new)
         else:
@@ -188,8 +174,7 @@ class WrenchEstimatorNode(Node):
     def _srv_calibrate(self, req: Trigger.Request, resp: Trigger.Response) -> Trigger.Response:
         """~/calibrate (module doc). Runs on the executor thread, between two samples."""
         try:
-            with self._lock:
-                r = self.estimator.calibrate_from_recent()
+            r = self.estimator.calibrate_from_recent()
         except CalibrationError as exc:
             resp.success, resp.message = False, str(exc)
             self.get_logger().warning(str(exc))
@@ -330,26 +315,6 @@ class WrenchEstimatorNode(Node):
             b.data = bool(est.contact[h])
             self.pub_contact[h].publish(b)
 
-    # ------------------------------------------------------------------ the input loop
-    def run(self, should_stop: Callable[[], bool]) -> None:
-        """Take and process the 1 kHz inputs until ``should_stop()`` (the worker thread)."""
-        js, ft = self._js_sub, self._ft_subs
-        while not should_stop():
-            self._inputs.wait(0.1)  # short: stop requests are seen
-            with self._lock:
-                while (data := js.take()) is not None:
-                    self._on_joint_state(data)
-                for h in HANDS:
-                    while (data := ft[h].take()) is not None:
-                        self._on_ft(h, data)
-
-    def destroy_node(self) -> None:
-        """Destroy the taken subscriptions, then the node."""
-        for sub in (self._js_sub, *self._ft_subs.values()):
-            sub.destroy()
-        super().destroy_node()
-
-
 
 def _describe_offsets(offsets: np.ndarray, samples: int, spread: float) -> str:
     """One line for a user: the offsets per sensor (force [N], torque [N m])."""
@@ -361,7 +326,7 @@ def _describe_offsets(offsets: np.ndarray, samples: int, spread: float) -> str:
 
 def main(args: list[str] | None = None) -> None:
     """Entry point (``ros2 run icub_pmp wrench_estimator``)."""
-    spin_node(WrenchEstimatorNode, args, "wrench_estimator", worker=WrenchEstimatorNode.run)
+    spin_node(WrenchEstimatorNode, args, "wrench_estimator")
 
 
 if __name__ == "__main__":

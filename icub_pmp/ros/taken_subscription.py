@@ -8,22 +8,21 @@ sizeable part of a step (docs/decisions/0065). A ``TakenSubscription`` is the sa
 subscription on the node (same topic, type and QoS; it shows in the graph as the node's
 subscription) that the executor does not know about: the thread that needs the messages waits
 on it with its own rcl wait set (:meth:`wait`, the GIL released meanwhile) and takes them
-(:meth:`take`), serialised (raw) or deserialised; :class:`TakenGroup` waits on several.
+(:meth:`take`), serialised (raw) or deserialised.
 
 Use it from one thread only; :meth:`destroy` it before the node.
 """
 
 from __future__ import annotations
 
-import contextlib
-from typing import Any, Sequence
+from typing import Any
 
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.type_support import check_is_valid_msg_type
 
-__all__ = ["TakenSubscription", "TakenGroup"]
+__all__ = ["TakenSubscription"]
 
 
 class TakenSubscription:
@@ -39,8 +38,7 @@ class TakenSubscription:
         with node.handle:
             self._sub = _rclpy.Subscription(node.handle, msg_type, topic,
                                             qos.get_c_qos_profile())
-        self.context = node.context.handle
-        self._wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, self.context)
+        self._wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, node.context.handle)
 
     def wait(self, timeout: float) -> bool:
         """Wait up to ``timeout`` [s] of wall time for a message (the GIL is released while
@@ -61,26 +59,3 @@ class TakenSubscription:
     def destroy(self) -> None:
         """Destroy the rcl subscription (before the node)."""
         self._sub.destroy_when_not_in_use()
-
-
-
-class TakenGroup:
-    """Several :class:`TakenSubscription` of one node waited on together (one wait set)."""
-
-    def __init__(self, subs: Sequence[TakenSubscription]):
-        if not subs:
-            raise ValueError("TakenGroup: no subscription given")
-        self.subs = tuple(subs)
-        self._wait_set = _rclpy.WaitSet(len(self.subs), 0, 0, 0, 0, 0, self.subs[0].context)
-
-    def wait(self, timeout: float) -> None:
-        """Wait up to ``timeout`` [s] of wall time until one of the subscriptions has a
-        message to take (the GIL is released while waiting); then take from each."""
-        ws = self._wait_set
-        with contextlib.ExitStack() as stack:
-            for s in self.subs:
-                stack.enter_context(s._sub)
-            ws.clear_entities()
-            for s in self.subs:
-                ws.add_subscription(s._sub)
-            ws.wait(max(0, int(timeout * 1e9)))
