@@ -30,6 +30,9 @@ compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
    ``estimator_stop_safe_hold_s`` (simulated) and ``_wall_s`` until the status says
    safe_hold, and its reason.
 
+Each DDS run also gives ``cpu_us_per_sim_ms``: CPU time [us] per simulated ms of each node
+process (/proc), far less load-sensitive than the wall-clock rtf (docs/decisions/0065).
+
 The machine is shared: wall-clock figures depend on its load (printed at start and end).
 Ends with one JSON line: lockstep_rtf (DDS), controller_us_median, tracking_rms_deg,
 tracking_final_deg, and the in-process figures (all ``ideal``), then ``ideal`` / ``icub``.
