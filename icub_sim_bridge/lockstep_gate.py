@@ -2,9 +2,8 @@
 
 After publishing the state stamped t, the simulator's next step waits for an effort command
 stamped exactly t (the controller's answer to that state), at most ``timeout`` of wall time;
-a command with another stamp (an answer to an earlier state) does not release it. Thread-safe
-(commands may arrive on another thread than the waiting one); the simulator's physics loop
-takes the commands itself and checks :attr:`answered` between them.
+a command with another stamp (an answer to an earlier state) does not release it. Thread-safe:
+commands arrive on the executor thread, the physics loop waits.
 """
 
 from __future__ import annotations
@@ -32,11 +31,6 @@ class LockstepGate:
         (an answer to an earlier state that arrives late no longer counts)."""
         self._expected_ns = int(stamp_ns)
         self._answered.clear()
-
-    @property
-    def answered(self) -> bool:
-        """Whether the answer to the last state came (not consumed: :meth:`wait` does)."""
-        return self._answered.is_set()
 
     def answer(self, stamp_ns: int) -> bool:
         """A command stamped ``stamp_ns`` [ns] arrived (valid or not: either way the state was

@@ -43,14 +43,11 @@ Streams other than /clock and /joint_states (FT, IMU, ground truth, cameras) are
 and published while they have subscribers (checked every 100 steps), as Gazebo's lazy
 publishers do.
 
-Threads: the physics loop runs on its own thread and is the only one touching MuJoCo; it also
-takes the /effort_command messages itself (:class:`~icub_pmp.ros.taken_subscription.
-TakenSubscription`: in lockstep it waits on the subscription for the answer, no executor
-dispatch and no second thread in between; docs/decisions/0065). The ``EventsExecutor`` spins
-on the main thread (``spin_once`` in a loop: the Jazzy wheel's ``spin()`` ignores SIGINT) for
-the services and parameters: service handlers queue a request that the physics loop executes
-between two steps and wait for its answer (synchronous handlers). Cameras render on their own
-worker thread.
+Threads: the physics loop runs on its own thread and is the only one touching MuJoCo; the
+``EventsExecutor`` spins on the main thread (``spin_once`` in a loop: the Jazzy wheel's
+``spin()`` ignores SIGINT): the effort callback validates and hands the command over, service
+handlers queue a request that the physics loop executes between two steps and wait for its
+answer (synchronous handlers). Cameras render on their own worker thread.
 
 Before a joint is first named in an effort command (and after each reset) the simulator holds
 it at its posture (``Simulator`` doc); the state published before a lockstep controller
@@ -94,7 +91,6 @@ from icub_pmp.ros.raw_messages import (
     RawWrenchStampedWriter,
     read_joint_state,
 )
-from icub_pmp.ros.taken_subscription import TakenSubscription
 from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
 from icub_sim_bridge.command_watchdog import CommandWatchdog
 from icub_sim_bridge.lockstep_gate import LockstepGate
@@ -212,8 +208,7 @@ class SimBridge(Node):
         self._effort_reader = RawJointStateReader()
         self._effort_names: list[str] | None = None  # names of the last valid command
         self._effort_idx = np.zeros(0, dtype=int)
-        # taken by the physics loop itself (module doc), not dispatched by the executor
-        self._effort_sub = TakenSubscription(self, JointState, "/effort_command", sd, raw=True)
+        self.create_subscription(JointState, "/effort_command", self._on_effort, sd, raw=True)
         self.create_service(ResetSim, "/sim/reset", self._srv_reset)
         self.create_service(SetObjectPose, "/sim/set_object_pose", self._srv_set_object_pose)
         self.create_service(MoveObject, "/sim/move_object", self._srv_move_object)
@@ -288,25 +283,6 @@ class SimBridge(Node):
             self.pub_info[side].publish(info)
 
     # ------------------------------------------------------------------ effort commands
-    def _take_efforts(self) -> None:
-        """Handle every /effort_command message waiting (the physics thread)."""
-        while (data := self._effort_sub.take()) is not None:
-            self._on_effort(data)
-
-    def _wait_for_answer(self, timeout: float, should_stop: Callable[[], bool]) -> bool:
-        """Lockstep: take /effort_command messages until the answer to the last published
-        state came (True) or ``timeout`` [s] of wall time passed (False, counted)."""
-        deadline = time.monotonic() + timeout
-        gate = self.lockstep
-        self._take_efforts()
-        while not gate.answered:
-            remaining = deadline - time.monotonic()
-            if remaining <= 0.0 or should_stop():
-                break
-            if self._effort_sub.wait(min(remaining, 0.1)):  # short: stop requests are seen
-                self._take_efforts()
-        return gate.wait(0.0)
-
     def _on_effort(self, data: bytes) -> None:
         try:
             msg = read_joint_state(self._effort_reader, data)
@@ -601,7 +577,6 @@ class SimBridge(Node):
             if self._requests:
                 self._drain_requests()
             if self.paused:
-                self._take_efforts()  # commands while paused apply on resume
                 self._wake.wait(0.05)
                 self._wake.clear()
                 self.pacer.restart(self.sim.time)
@@ -610,14 +585,13 @@ class SimBridge(Node):
                 continue
             cfg = self.config
             if cfg.mode == "lockstep":
-                if not self._wait_for_answer(cfg.lockstep_timeout, should_stop):
+                if not self.lockstep.wait(cfg.lockstep_timeout):
                     if should_stop():
                         break
                     self._hold(self.watchdog.missed_answer(self.sim.time,
                                                            cfg.lockstep_timeout))
                 self.pacer.restart(self.sim.time)
             else:
-                self._take_efforts()
                 self._hold(self.watchdog.check(cfg.command_timeout))
             self._apply_pending()
             self.sim.step()
@@ -637,7 +611,6 @@ class SimBridge(Node):
         if self.cameras is not None:
             self.cameras.close()
             self.cameras = None
-        self._effort_sub.destroy()
         super().destroy_node()
 
     @property
