@@ -30,6 +30,9 @@ compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
    ``estimator_stop_safe_hold_s`` (simulated) and ``_wall_s`` until the status says
    safe_hold, and its reason.
 
+Each DDS run also gives ``cpu_us_per_sim_ms``: CPU time [us] per simulated ms of each node
+process (/proc), far less load-sensitive than the wall-clock rtf (docs/decisions/0065).
+
 The machine is shared: wall-clock figures depend on its load (printed at start and end).
 Ends with one JSON line: lockstep_rtf (DDS), controller_us_median, tracking_rms_deg,
 tracking_final_deg, and the in-process figures (all ``ideal``), then ``ideal`` / ``icub``.
@@ -61,6 +64,23 @@ from icub_sim_bridge.simulator import Simulator  # noqa: E402
 
 def _load() -> str:
     return " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def _tree_cpu_s(pid: int) -> float:
+    """CPU time [s] (user + system, /proc) of process ``pid`` and its descendants (a node's
+    script execs its Python process)."""
+    tick = os.sysconf("SC_CLK_TCK")
+    total, todo = 0.0, [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            fields = Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()
+            total += (int(fields[11]) + int(fields[12])) / tick
+            for task in Path(f"/proc/{p}/task").iterdir():
+                todo += [int(c) for c in (task / "children").read_text().split()]
+        except (OSError, IndexError, ValueError):
+            continue  # gone meanwhile
+    return total
 
 
 def bench_inprocess(sim: Simulator, seconds: float) -> dict:
@@ -119,11 +139,13 @@ def bench_tracking(sim: Simulator, friction_compensation: bool = False) -> dict:
 
 
 def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
-              stop_estimator: bool = False) -> dict:
+              stop_estimator: bool = False,
+              extra: dict[str, dict[str, object]] | None = None) -> dict:
     """Lockstep real-time factor of sim_bridge + wrench_estimator (one joint-state sample in
     ``sample_every``; None = no estimator) + impedance_controller, on the realism ``preset``;
     the controller's stale-estimate count; with ``stop_estimator``, the time to the safe hold
-    once the estimator is killed."""
+    once the estimator is killed; ``extra`` {node: {parameter: value}} overrides the
+    bench's parameters (experiments)."""
     from rosgraph_msgs.msg import Clock
 
     from icub_interfaces.msg import ControllerStatus
@@ -143,6 +165,8 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
                              "sample_every": sample_every or 1},
         "impedance_controller": {"use_sim_time": True},
     })
+    for node, values in (extra or {}).items():
+        params.setdefault(node, {}).update(values)
     nodes = ["sim_bridge", "impedance_controller"]
     if sample_every is not None:
         nodes.insert(1, "wrench_estimator")
@@ -165,16 +189,22 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
 
                 time.sleep(2.0)  # warm-up
                 st0 = status()
+                c0 = {n: _tree_cpu_s(p.pid) for n, p in g.procs.items()}
                 s0, w0 = sim_t(), time.perf_counter()
                 time.sleep(window)
                 s1, w1 = sim_t(), time.perf_counter()
+                c1 = {n: _tree_cpu_s(p.pid) for n, p in g.procs.items()}
                 st1 = status()
                 timeouts = g.procs["sim_bridge"].output().count("lockstep: no /effort_command")
                 out = {"rtf": (s1 - s0) / (w1 - w0), "window_s": w1 - w0,
                        "timeouts": timeouts,
                        "stale_estimate_steps": int(st1.stale_estimate_steps
                                                    - st0.stale_estimate_steps),
-                       "controller_steps": int(st1.steps - st0.steps)}
+                       "controller_steps": int(st1.steps - st0.steps),
+                       # CPU [us] per simulated ms, per process: much less load-sensitive
+                       # than the wall-clock rtf (0008)
+                       "cpu_us_per_sim_ms": {n: round((c1[n] - c0[n]) * 1e3 / (s1 - s0), 1)
+                                             for n in c0}}
                 if stop_estimator:
                     t_kill, w_kill = sim_t(), time.perf_counter()
                     g.kill("wrench_estimator")

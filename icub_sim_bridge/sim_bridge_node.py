@@ -88,6 +88,7 @@ from icub_pmp.ros.raw_messages import (
     RawJointState,
     RawJointStateReader,
     RawJointStateWriter,
+    RawWrenchStampedWriter,
     read_joint_state,
 )
 from icub_sim_bridge import CameraRenderer, SimConfig, Simulator
@@ -167,18 +168,11 @@ class SimBridge(Node):
         # --- reusable messages (filled in place every step)
         self._clock_msg = Clock()
         self._js_writer = RawJointStateWriter(list(self._names))
-        self._ft_msgs = {}
-        for n in FT_SENSORS:
-            m = WrenchStamped()
-            m.header.frame_id = n
-            self._ft_msgs[n] = m
+        # the FT wrenches are serialised directly too (two or four per 1 kHz step)
+        self._ft_writers = {n: RawWrenchStampedWriter(n) for n in FT_SENSORS}
         self._imu_msg = Imu()
         self._imu_msg.header.frame_id = "head_imu_0"
-        self._gt_msgs = {}
-        for h in ("left", "right"):
-            m = WrenchStamped()
-            m.header.frame_id = "root_link"
-            self._gt_msgs[h] = m
+        self._gt_writer = RawWrenchStampedWriter("root_link")
         self._self_msg = SelfContacts()
         self._self_msg.header.frame_id = "root_link"
         self._objc_msg = ObjectContacts()
@@ -461,13 +455,8 @@ class SimBridge(Node):
         self.pub_js.publish(self._js_writer.write(ns, st.position, st.velocity, st.effort))
         ft = sim.ft_all()
         for k, n in enumerate(FT_SENSORS):
-            if not self._active(self.pub_ft[n]):
-                continue
-            m = self._ft_msgs[n]
-            _set_stamp(m.header.stamp, ns)
-            _set_vec(m.wrench.force, ft[k, :3])
-            _set_vec(m.wrench.torque, ft[k, 3:])
-            self.pub_ft[n].publish(m)
+            if self._active(self.pub_ft[n]):
+                self.pub_ft[n].publish(self._ft_writers[n].write(ns, ft[k]))
         step = sim.steps
         if step % self.config.imu_decimation == 0 and self._active(self.pub_imu):
             imu = sim.imu()
@@ -480,14 +469,10 @@ class SimBridge(Node):
             _set_vec(m.linear_acceleration, imu.linear_acceleration)
             self.pub_imu.publish(m)
         if step % self.config.ground_truth_decimation == 0:
-            for h, m in self._gt_msgs.items():
-                if not self._active(self.pub_gt[h]):
-                    continue
-                w = sim.contact_wrench(h)
-                _set_stamp(m.header.stamp, ns)
-                _set_vec(m.wrench.force, w.force)
-                _set_vec(m.wrench.torque, w.torque)
-                self.pub_gt[h].publish(m)
+            for h, pub in self.pub_gt.items():
+                if self._active(pub):
+                    w = sim.contact_wrench(h)
+                    pub.publish(self._gt_writer.write(ns, np.r_[w.force, w.torque]))
             for o, pub in self.pub_obj.items():
                 if not self._active(pub):
                     continue

@@ -93,3 +93,29 @@ def test_joint_state_writer_round_trips_through_rclpy(frame, present):
     assert r.name == names and r.stamp_ns == 7_000_000_123
     with pytest.raises(InvalidInput, match="3 values for 4"):
         writer.write(0, np.zeros(3))
+
+
+@pytest.mark.parametrize("frame", ["", "a", "ab", "abc", "abcd", "l_arm_ft", "r_arm_ft_x"])
+def test_wrench_stamped_writer_equals_rclpy_serialisation(frame):
+    """Bytes from RawWrenchStampedWriter deserialise (rclpy) to the intended message for
+    frame_id lengths covering every alignment, are as long as rclpy's own serialisation, and
+    the raw reader reads them back; a wrench of the wrong shape raises."""
+    from rclpy.serialization import deserialize_message
+
+    from icub_pmp.ros.raw_messages import RawWrenchStampedWriter
+
+    w = np.random.default_rng(len(frame)).normal(size=6)
+    data = RawWrenchStampedWriter(frame).write(9_000_000_042, w)
+    m = deserialize_message(data, WrenchStamped)
+    assert (m.header.stamp.sec, m.header.stamp.nanosec) == (9, 42)
+    assert m.header.frame_id == frame
+    f, t = m.wrench.force, m.wrench.torque
+    np.testing.assert_array_equal([f.x, f.y, f.z, t.x, t.y, t.z], w)
+    ref = WrenchStamped()
+    ref.header.frame_id = frame
+    assert len(data) == len(serialize_message(ref))
+    ns, got = raw_wrench_stamped(data)
+    assert ns == 9_000_000_042
+    np.testing.assert_array_equal(got, w)
+    with pytest.raises(InvalidInput, match="shape"):
+        RawWrenchStampedWriter(frame).write(0, np.zeros(5))

@@ -48,7 +48,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from builtin_interfaces.msg import Time
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -97,7 +96,7 @@ class ImpedanceControllerNode(Node):
         self._js_names: list[str] | None = None
         self._js_idx: np.ndarray | None = None
         self._est_names: list[str] | None = None
-        self.gate: EstimateGate[tuple[float, np.ndarray, np.ndarray, Time]] = EstimateGate()
+        self.gate: EstimateGate[tuple[float, np.ndarray, np.ndarray, int]] = EstimateGate()
         self.clock = TimeJumpDetector()  # the joint states' time going back
         self.warn = WarningThrottle(self.get_logger())  # one budget per kind of warning
         self._latest: tuple[float, np.ndarray, np.ndarray] | None = None
@@ -114,8 +113,7 @@ class ImpedanceControllerNode(Node):
         self.pub_effort = self.create_publisher(JointState, "/effort_command", sd)
         self.pub_state = self.create_publisher(JointState, "/impedance_controller/state", sd)
         self._effort_writer = RawJointStateWriter(list(self.names))
-        self._state = JointState()
-        self._state.name = self.names
+        self._state_writer = RawJointStateWriter(list(self.names))
         # the two 1 kHz inputs are read from their bytes (raw_messages), not deserialised
         self._js_reader = RawJointStateReader()
         self._est_reader = RawJointStateReader()
@@ -194,14 +192,12 @@ class ImpedanceControllerNode(Node):
             self.get_logger().warning(
                 f"{jump.describe()} (a simulator restart?): trajectories stopped, the old "
                 "estimate forgotten, holding the measured posture", throttle_duration_sec=1.0)
-        sec, nanosec = divmod(ns, 1_000_000_000)
-        stamp = Time(sec=sec, nanosec=nanosec)
         cfg = self.controller.config
         if not cfg.lockstep:
             self._latest = (ns * 1e-9, q, v)
             self._latest_new = True
             return
-        sample = (ns * 1e-9, q, v, stamp)
+        sample = (ns * 1e-9, q, v, ns)
         if ns > self._js_ns:
             self._js_gap_ns, self._js_ns = ns - self._js_ns, ns
         age = self.controller.estimate_age(ns * 1e-9)
@@ -329,7 +325,7 @@ class ImpedanceControllerNode(Node):
             return
         self._latest_new = False
         t, q, v = self._latest
-        self._step(t, q, v, self.get_clock().now().to_msg())
+        self._step(t, q, v, self.get_clock().now().nanoseconds)
 
     def _on_pending_timeout(self) -> None:
         sample = self.gate.expired(self.controller.config.estimate_timeout)
@@ -346,7 +342,9 @@ class ImpedanceControllerNode(Node):
                 f"no joint state for {self.controller.config.state_timeout} s: safe hold at "
                 "the last measured posture (motions aborted)")
 
-    def _step(self, t: float, q: np.ndarray, v: np.ndarray, stamp) -> None:
+    def _step(self, t: float, q: np.ndarray, v: np.ndarray, stamp_ns: int) -> None:
+        """One control step on the joint state of time ``t`` [s]; the effort command is
+        stamped ``stamp_ns`` [ns] (lockstep: the joint state's own stamp)."""
         was_safe = self.controller.safe_hold
         try:
             out = self.controller.step(t, q, v)
@@ -357,7 +355,7 @@ class ImpedanceControllerNode(Node):
         self.steps += 1
         # serialised directly (raw_messages): the names are encoded once
         self.pub_effort.publish(self._effort_writer.write(
-            stamp.sec * 1_000_000_000 + stamp.nanosec, effort=out.tau))
+            stamp_ns, effort=out.tau))
         self.action.resolve(feedback=self.steps % self.controller.config.feedback_every == 0)
         if was_safe and not self.controller.safe_hold:
             self.get_logger().info("safe hold released: holding the measured posture")
@@ -374,12 +372,8 @@ class ImpedanceControllerNode(Node):
             self._status = out.status
         every = self.controller.config.state_publish_every
         if every and self.steps % every == 0:
-            s = self._state
-            s.header.stamp = stamp
-            s.position = out.setpoint.q.tolist()
-            s.velocity = out.setpoint.v.tolist()
-            s.effort = out.tau.tolist()
-            self.pub_state.publish(s)
+            self.pub_state.publish(self._state_writer.write(
+                stamp_ns, out.setpoint.q, out.setpoint.v, out.tau))
 
 
 def main(args: list[str] | None = None) -> None:

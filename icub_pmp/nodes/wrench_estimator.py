@@ -44,7 +44,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
@@ -59,13 +58,14 @@ from icub_pmp.dynamics.wrench_estimator import WrenchEstimator
 from icub_pmp.dynamics.wrench_estimator_config import WrenchEstimatorConfig
 from icub_pmp.errors import IcubPmpError, InvalidInput
 from icub_pmp.kinematics.robot_spec import HANDS
-from icub_pmp.ros.conversions import joint_state_arrays, set_wrench, wrench_to_array
+from icub_pmp.ros.conversions import joint_state_arrays, wrench_to_array
 from icub_pmp.ros.node_runner import spin_node
 from icub_pmp.ros.parameters import ConfigParameters
 from icub_pmp.ros.raw_messages import (
     RawJointState,
     RawJointStateReader,
     RawJointStateWriter,
+    RawWrenchStampedWriter,
     raw_wrench_stamped,
     read_joint_state,
 )
@@ -119,14 +119,11 @@ class WrenchEstimatorNode(Node):
             WrenchStamped, f"/wrench_estimator/predicted_ft/{_FT_TOPIC[h]}", sd) for h in HANDS}
         # reusable messages
         self._tau_writer = RawJointStateWriter(list(self.names))
-        self._stamp_msg = Time()  # the stamp of the decimated outputs
-        self._ext_msg = {h: WrenchStamped() for h in HANDS}
-        self._ext_root_msg = {h: WrenchStamped() for h in HANDS}
-        self._pred_msg = {h: WrenchStamped() for h in HANDS}
-        for h in HANDS:
-            self._ext_msg[h].header.frame_id = self.estimator.spec.hand_frame(h)
-            self._ext_root_msg[h].header.frame_id = self.estimator.spec.root_frame
-            self._pred_msg[h].header.frame_id = _FT_TOPIC[h]
+        # the decimated wrench outputs are serialised directly too (six per publication)
+        self._ext_writer = {h: RawWrenchStampedWriter(self.estimator.spec.hand_frame(h))
+                            for h in HANDS}
+        self._ext_root_writer = RawWrenchStampedWriter(self.estimator.spec.root_frame)
+        self._pred_writer = {h: RawWrenchStampedWriter(_FT_TOPIC[h]) for h in HANDS}
         self._bool = {h: Bool() for h in HANDS}
 
         # raw subscriptions: the stamp is read from the CDR bytes and only the samples that
@@ -218,7 +215,7 @@ class WrenchEstimatorNode(Node):
         except Exception as exc:  # a corrupt serialised message
             self._warn("ft", f"{_FT_KEY[hand]}: message dropped: cannot read it: {exc}")
             return
-        if not np.all(np.isfinite(w)):
+        if not np.isfinite(w).all():
             self._warn("ft", f"{_FT_KEY[hand]}: message at t = {ns * 1e-9:.3f} s dropped: "
                        "NaN or infinite wrench")
             return
@@ -310,21 +307,10 @@ class WrenchEstimatorNode(Node):
         self.pub_tau.publish(self._tau_writer.write(ns, effort=est.tau))
         if self.samples % self.config.publish_every:
             return
-        stamp = self._stamp_msg
-        stamp.sec, stamp.nanosec = divmod(ns, 1_000_000_000)
         for h in HANDS:
-            e = self._ext_msg[h]
-            e.header.stamp = stamp
-            set_wrench(e.wrench, est.ext_hand[h])
-            self.pub_ext[h].publish(e)
-            r = self._ext_root_msg[h]
-            r.header.stamp = stamp
-            set_wrench(r.wrench, est.ext_root[h])
-            self.pub_ext_root[h].publish(r)
-            p = self._pred_msg[h]
-            p.header.stamp = stamp
-            set_wrench(p.wrench, est.ft_predicted[h])
-            self.pub_pred[h].publish(p)
+            self.pub_ext[h].publish(self._ext_writer[h].write(ns, est.ext_hand[h]))
+            self.pub_ext_root[h].publish(self._ext_root_writer.write(ns, est.ext_root[h]))
+            self.pub_pred[h].publish(self._pred_writer[h].write(ns, est.ft_predicted[h]))
             b = self._bool[h]
             b.data = bool(est.contact[h])
             self.pub_contact[h].publish(b)

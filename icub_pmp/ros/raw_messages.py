@@ -11,8 +11,9 @@ its own size relative to the end of the encapsulation header; a string is a uint
 (including the NUL) and its bytes; a sequence is a uint32 count and its elements (float64
 aligned to 8). Only little-endian data is read here; anything unexpected raises
 :class:`~icub_pmp.errors.InvalidInput` and the caller falls back to ``deserialize_message``.
-:class:`RawJointStateWriter` is the other direction (``Publisher.publish`` takes bytes): the
-names are encoded once, not converted from 23 Python strings on every publication.
+:class:`RawJointStateWriter` and :class:`RawWrenchStampedWriter` are the other direction
+(``Publisher.publish`` takes bytes): the names and frame ids are encoded once, not converted
+from Python objects on every publication.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ __all__ = [
     "RawJointState",
     "RawJointStateReader",
     "RawJointStateWriter",
+    "RawWrenchStampedWriter",
     "raw_header_stamp_ns",
     "raw_wrench_stamped",
     "read_joint_state",
@@ -212,3 +214,25 @@ class RawJointStateWriter:
         out = b"".join(parts)
         sec, nanosec = divmod(stamp_ns, 1_000_000_000)
         return out[:4] + _STAMP.pack(sec, nanosec) + out[12:]
+
+
+class RawWrenchStampedWriter:
+    """Serialises geometry_msgs/WrenchStamped with a fixed ``frame_id`` (little-endian CDR,
+    what ``serialize_message`` produces, up to the padding bytes): the simulator's FT sensors
+    publish two of them every 1 kHz step, and filling the six nested Python objects of a
+    WrenchStamped cost more than the rest of its publication."""
+
+    def __init__(self, frame_id: str = ""):
+        raw = frame_id.encode() + b"\0"
+        body = b"\0" * 8 + _U32.pack(len(raw)) + raw  # stamp (written per message), frame_id
+        self._head = b"\0\1\0\0"
+        self._frame = body[8:] + b"\0" * ((-len(body)) % 8)  # the wrench is 8-aligned
+
+    def write(self, stamp_ns: int, wrench: np.ndarray) -> bytes:
+        """The serialised message: stamp [ns] and ``wrench`` (6,) [fx, fy, fz, tx, ty, tz]
+        ([N], [N m])."""
+        w = np.asarray(wrench, dtype="<f8")
+        if w.shape != (6,):
+            raise InvalidInput(f"wrench: expected shape (6,), got {w.shape}")
+        sec, nanosec = divmod(stamp_ns, 1_000_000_000)
+        return self._head + _STAMP.pack(sec, nanosec) + self._frame + w.tobytes()
