@@ -29,6 +29,7 @@ import numpy as np
 
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
+from icub_pmp.pmp.body_volume import BodyVolume
 from icub_pmp.pmp.branch_network import BranchNetwork
 from icub_pmp.pmp.force_field import ForceField
 from icub_pmp.pmp.idle_hand_hold import hold_idle_hand
@@ -80,6 +81,7 @@ class PmpPlanner:
         self._memories: dict[tuple, PostureMemory] = {}
         self._branch_cache: dict[tuple, BranchNetwork] = {}
         self._limit_cache: dict[tuple, JointLimitField] = {}
+        self._volume_cache: dict[str, BodyVolume | None] = {}
         c = self.config
         self._field = ForceField(np.zeros(3), np.array(c.stiffness), c.curl, c.curl_axis)
         self._relax = Relaxation(self._settings(self.config.max_steps))
@@ -171,10 +173,28 @@ class PmpPlanner:
             finals += list(goal.held_object.hand_targets().values())
         # obstacle fields do not reach the targets (the equilibrium stays on them)
         obstacles = [ob.clear_of(finals) for ob in goal.obstacles]
+        volumes = self._volumes(goal.hands) if obstacles else {}
         return PmpNetwork(
             self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
             targets, orientations, obstacles, limits, goal.held_object, posture,
+            volumes=volumes, volume_null_distance=c.obstacle_body_null_distance,
         )
+
+    def _volumes(self, hands) -> dict[str, BodyVolume]:
+        """hand -> the spheres covering its ``obstacle_body_links`` (built once); none when
+        the body model lacks those link frames (the hand frame alone is kept clear then)."""
+        links = tuple(lk for lk in self.config.obstacle_body_links if lk)
+        out = {}
+        for h in hands:
+            if h not in self._volume_cache:
+                vol = None
+                prefix = self.spec.arm_joints(h)[0][:2]
+                if links and all(prefix + lk in self.provider.frame_names() for lk in links):
+                    vol = BodyVolume.from_urdf(self.provider, h, links, self.spec)
+                self._volume_cache[h] = vol
+            if self._volume_cache[h] is not None:
+                out[h] = self._volume_cache[h]
+        return out
 
     def _branches(self, goal: ReachGoal) -> BranchNetwork:
         """The branching network of the goal's hands, trunk and admittance modulation."""
@@ -301,7 +321,8 @@ class PmpPlanner:
         net2 = PmpNetwork(
             self.provider, net.branches, dict(zip(net.hands, net.frames)), net.q_full(
                 trace.z[-1]), net.targets, net.orientations, net.obstacles, net.joint_limits,
-            net.held_object, None, field,
+            net.held_object, None, field, volumes=net.volumes,
+            volume_null_distance=net.volume_null_distance,
         )
         scale = trace.rate_scale
         net2.admittance = net2.admittance * scale  # same time scale as the reach
@@ -353,9 +374,14 @@ class PmpPlanner:
         names = net.branches.joint_names
         idle = self._idle_arm_joints(goal, net, joints)
         if idle:  # decision 0056: the idle hands stay where they were
+            dt = float(np.min(np.diff(times))) if len(times) > 1 else c.sample_period
             for frame, arm in idle:
-                q_full[:, arm] = hold_idle_hand(self.provider, frame, arm, q_full,
-                                                c.idle_hand_margin)
+                # at most half the joints' velocity and acceleration limits
+                vmax = np.array([self.spec.velocity_limit(self._names[i]) for i in arm])
+                amax = np.array([self.spec.acceleration_limit(self._names[i]) for i in arm])
+                q_full[:, arm] = hold_idle_hand(
+                    self.provider, frame, arm, q_full, c.idle_hand_margin,
+                    max_step=0.5 * vmax * dt, max_step_change=0.5 * amax * dt * dt)
             extra = [i for _, arm in idle for i in arm]
             names = names + tuple(self._names[i] for i in extra)
             joints = np.hstack([joints, q_full[:, extra]])
@@ -382,10 +408,12 @@ class PmpPlanner:
         hand_paths = functools.lru_cache(maxsize=1)(
             lambda: self._hand_paths(net.hands, net.frames, q_full))
         clearance, kept = None, True
-        if net.obstacles:  # judged on the sampled plan, not only the relaxation's nodes
-            pts = np.concatenate(list(hand_paths().values()))
-            clearance = min(float(np.min(ob.surface_distance(pts))) for ob in net.obstacles)
-            kept = min(float(np.min(ob.clearance(pts))) for ob in net.obstacles) >= 0.0
+        if net.obstacles:  # judged on the sampled plan, not only the relaxation's nodes, on
+            # the hands and their body volumes; a body that starts within the clearance must
+            # not come closer than it started
+            surface, grown = net.body_clearances(q_full)
+            clearance = float(surface.min())
+            kept = float(grown.min()) >= min(0.0, float(grown[0]))
             ok = ok and kept
         message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory,
                                 not kept, bool(net.obstacles))

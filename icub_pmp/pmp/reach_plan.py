@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Callable, Mapping
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -91,6 +91,15 @@ class ReachPlan:
     def max_residual(self) -> float:
         """Largest hand residual at tau [m]."""
         return max(self.residuals.values(), default=0.0)
+
+    def configurations(self, joint_names: Sequence[str]) -> np.ndarray:
+        """Full configurations (N, nq) [rad] at the samples, in the order of ``joint_names``
+        (the body model's, that of :attr:`q_start`); joints the plan does not move stay at
+        ``q_start``."""
+        names = list(joint_names)
+        q = np.repeat(np.asarray(self.q_start, dtype=float)[None], len(self.t), axis=0)
+        q[:, [names.index(j) for j in self.joint_names]] = self.positions
+        return q
 
     def hand_speed(self, hand: str) -> np.ndarray:
         """(N,) hand speed [m/s] along the predicted path (finite differences)."""
