@@ -68,6 +68,7 @@ from icub_pmp.graph import (
     reserve_domain_id,
     ros_environment,
 )
+from icub_pmp.kinematics import IcubModel
 from icub_pmp.ros.conversions import time_to_sec
 from icub_pmp.ros.probe import RosProbe
 
@@ -503,7 +504,7 @@ def hand_contact_point(model: IcubModel, q: np.ndarray, link: str = "r_hand") ->
     """The lowest point (3,) [m, root_link] of ``link``'s collision hull at posture ``q``:
     where a hand lowered onto the table touches it (the fingertips, up to 6 cm below the hand
     frame in the demo's press posture)."""
-    from icub_pmp.peripersonal.link_hull import LinkHull
+    from icub_pmp.geometry import LinkHull
 
     hull = _hand_hulls().get(link)
     if not isinstance(hull, LinkHull):
@@ -516,11 +517,12 @@ def hand_contact_point(model: IcubModel, q: np.ndarray, link: str = "r_hand") ->
 def _hand_hulls() -> dict:
     """link -> LinkHull of both hands' collision meshes (built once)."""
     if not hasattr(_hand_hulls, "cache"):
-        from icub_pmp.peripersonal import ArmBodyModel
-        from icub_pmp.pmp import PinocchioJacobianProvider
+        from icub_pmp.geometry import urdf_link_hulls
+        from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
 
-        body = ArmBodyModel.from_urdf(PinocchioJacobianProvider(), links=("hand",))
-        _hand_hulls.cache = {h.frame: h for hs in body.hulls.values() for h in hs}
+        spec = RobotSpec.load()
+        _hand_hulls.cache = {h.frame: h for arm in HANDS
+                             for h in urdf_link_hulls(spec, arm, ("hand",))}
     return _hand_hulls.cache
 
 

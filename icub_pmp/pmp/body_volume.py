@@ -8,7 +8,7 @@ BodyVolume covers those hulls with spheres, each fixed in its link frame: the re
 fields act on every sphere (grown by its radius) and the clearance is judged on them.
 
 Built from the capsules that bound the links' collision hulls
-(:func:`~icub_pmp.peripersonal.capsule.fit_capsules`, the same hulls the imagined collision
+(:func:`~icub_pmp.geometry.fit_capsules`, the same hulls the imagined collision
 check uses): a capsule of radius ``r`` and length ``L`` becomes ``ceil(L / (spacing r)) + 1``
 spheres evenly along its segment, whose radius is grown so that their union covers the
 capsule (between two centres ``d`` apart the capsule's surface lies at most
@@ -90,17 +90,27 @@ class BodyVolume:
 
     @classmethod
     def from_urdf(cls, provider: JacobianProvider, hand: str, links: Sequence[str],
-                  spec=None, spacing: float = 1.0) -> "BodyVolume":  # noqa: ANN001 - RobotSpec
+                  spec=None, spacing: float = 1.0,  # noqa: ANN001 - RobotSpec
+                  max_pieces: int = 4) -> "BodyVolume":
         """The spheres covering the URDF collision hulls of ``hand``'s arm ``links`` (names
-        after the l_/r_ prefix, e.g. ``hand``, ``wrist_1``, ``forearm``), for ``provider``."""
-        from icub_pmp.peripersonal.arm_body_model import ArmBodyModel
+        after the l_/r_ prefix, e.g. ``hand``, ``wrist_1``, ``forearm``), for ``provider``
+        (the hulls' capsules as the imagined collision check fits them: at most
+        ``max_pieces`` per hull)."""
+        from icub_pmp.geometry import fit_capsules, urdf_link_hulls
+        from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
 
         if not links:
             raise InvalidInput("links: expected at least one link name, got none")
-        body = ArmBodyModel.from_urdf(provider, spec, links=tuple(links))
-        if hand not in body.capsules:
-            raise UnknownName("hand", hand, tuple(body.capsules))
-        return cls.from_capsules(body.capsules[hand], spacing)
+        if hand not in HANDS:
+            raise UnknownName("hand", hand, HANDS)
+        hulls = urdf_link_hulls(spec or RobotSpec.load(), hand, links)
+        frames = set(provider.frame_names())
+        capsules = []
+        for h in hulls:
+            if h.frame not in frames:
+                raise UnknownName("frame of the body model", h.frame, frames)
+            capsules.extend(fit_capsules(h.frame, h.points, max_pieces))
+        return cls.from_capsules(capsules, spacing)
 
     def positions(self, kin: FrameKinematics) -> np.ndarray:
         """Sphere centres (n, 3) [m] in the base frame, from the kinematics of
@@ -127,7 +137,7 @@ class BodyVolume:
 def hull_distances(provider: JacobianProvider, hulls: Sequence, q_samples: np.ndarray,
                    obstacle) -> np.ndarray:  # noqa: ANN001 - any ObstacleField
     """Smallest distance [m] of the surface samples of ``hulls`` (each with ``frame`` and
-    ``points`` (n, 3) [m] in that frame, e.g. :class:`~icub_pmp.peripersonal.LinkHull`: the
+    ``points`` (n, 3) [m] in that frame, e.g. :class:`~icub_pmp.geometry.LinkHull`: the
     convex hulls the physics collides) to ``obstacle``'s real surface, at each configuration
     of ``q_samples`` (K, nq) (K,): an independent judge of a plan's clearance."""
     frames = [h.frame for h in hulls]
