@@ -145,3 +145,30 @@ def test_the_idle_left_arm_stays_within_its_velocity_limits(planners):
     acc = np.abs(np.diff(speed, axis=0)) / np.diff(plan.t)[1:, None]
     amax = np.array([planner.spec.acceleration_limit(plan.joint_names[i]) for i in idle])
     assert np.all(acc <= amax), acc.max(axis=0)
+
+
+def test_no_room_for_the_arm_falls_back_to_the_hand_frames_and_says_so(planners, hulls):
+    """A sphere where the hand passes half way up to its target, which is where the forearm
+    ends (decision 0063): with the arm's volume kept clear the plan stalls against the sphere,
+    so the planner keeps the hand frame clear only (as before the volumes): the hand arrives,
+    its path keeps the clearance, and the answer says the volume was not kept and how close
+    the arm comes (the hulls' true distance is no smaller)."""
+    from icub_pmp.pmp.obstacle_field import ObstacleField
+
+    planner = planners[0]
+    target = np.array([-0.28, 0.10, 0.20])
+    free = planner.plan(ReachGoal(targets={"right": target}, use_torso=False))
+    path = free.hand_paths["right"]
+    centre, radius = path[len(path) // 2], 0.03
+    sphere = ObstacleField(centre, radius, influence=0.05, inflation=CLEARANCE + 0.005)
+    plan = planner.plan(ReachGoal(targets={"right": target}, use_torso=False,
+                                  obstacles=(sphere,)))
+    assert plan.success and plan.residuals["right"] < 1e-3, plan.message
+    hand = np.linalg.norm(plan.hand_paths["right"] - centre, axis=1) - radius
+    assert hand.min() >= CLEARANCE - 1e-3
+    assert "hand frames only" in plan.message, plan.message
+    said = float(plan.message.split("the arm's volume comes within ")[1].split(" mm")[0])
+    assert said < CLEARANCE * 1e3
+    dist = hull_distances(planner.provider, hulls,
+                          plan.configurations(planner.provider.joint_names), sphere)
+    assert dist.min() * 1e3 >= said - 0.1  # the spheres bound the hulls

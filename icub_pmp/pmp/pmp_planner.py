@@ -127,9 +127,12 @@ class PmpPlanner:
         return q
 
     def build_network(
-        self, goal: ReachGoal, q_start: np.ndarray, posture: PostureField | None = None
+        self, goal: ReachGoal, q_start: np.ndarray, posture: PostureField | None = None,
+        body_volumes: bool = True,
     ) -> PmpNetwork:
-        """The PMP network of ``goal`` on the body model (validates the goal)."""
+        """The PMP network of ``goal`` on the body model (validates the goal); with
+        ``body_volumes`` the obstacle fields also act on the arms' volumes
+        (``obstacle_body_links``), else on the hand frames only."""
         c = self.config
         for h in goal.hands:
             if h not in HANDS:
@@ -173,7 +176,7 @@ class PmpPlanner:
             finals += list(goal.held_object.hand_targets().values())
         # obstacle fields do not reach the targets (the equilibrium stays on them)
         obstacles = [ob.clear_of(finals) for ob in goal.obstacles]
-        volumes = self._volumes(goal.hands) if obstacles else {}
+        volumes = self._volumes(goal.hands) if obstacles and body_volumes else {}
         return PmpNetwork(
             self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
             targets, orientations, obstacles, limits, goal.held_object, posture,
@@ -237,9 +240,32 @@ class PmpPlanner:
     ) -> ReachPlan:
         """Plan ``goal`` from ``q_start`` (see :meth:`start_configuration`)."""
         t0 = time.perf_counter()
-        c = self.config
         q0 = self.start_configuration(q_start)
         net = self.build_network(goal, q0)
+        trace, attempts, used_memory = self._relax_recalling(goal, q0, net, True)
+        body_net = None
+        if net.volumes and not self._reached(trace):
+            # decision 0063: the arms' volumes kept clear is best effort; when the plan with
+            # them does not reach, the hand frames alone keep the clearance (the contract of
+            # the request, and the planner's before the volumes) and the answer says how close
+            # the arm's volume comes
+            hand_net = self.build_network(goal, q0, body_volumes=False)
+            trace2, more, memory2 = self._relax_recalling(goal, q0, hand_net, False)
+            attempts += more
+            if self._reached(trace2):
+                body_net, net, trace, used_memory = net, hand_net, trace2, memory2
+        null_space = np.zeros(trace.steps, dtype=bool)
+        torque_field = None
+        if goal.target_forces or goal.torque_limits:
+            trace, null_space, torque_field = self._settle_torques(goal, net, trace)
+        return self._make_plan(goal, net, trace, null_space, torque_field, attempts,
+                               used_memory, t0, body_net)
+
+    def _relax_recalling(self, goal: ReachGoal, q0: np.ndarray, net: PmpNetwork,
+                         body_volumes: bool) -> tuple[RelaxationTrace, int, bool]:
+        """Relax ``net``; when it does not reach, again from recalled postures (the posture
+        memory): (the best trace, relaxations run, whether a recall gave it)."""
+        c = self.config
         relax = self._relax_obstacles if goal.obstacles else self._relax
         trace = relax.run(net)
         attempts, used_memory = 1, False
@@ -249,18 +275,14 @@ class PmpPlanner:
             )
             for recall in recalls:
                 field = PostureField(recall.q, c.posture_field_gain, c.posture_field_decay)
-                trace2 = relax.run(self.build_network(goal, q0, posture=field))
+                trace2 = relax.run(self.build_network(goal, q0, posture=field,
+                                                      body_volumes=body_volumes))
                 attempts += 1
                 if self._score(trace2) < self._score(trace):
                     trace, used_memory = trace2, True
                 if self._reached(trace):
                     break
-        null_space = np.zeros(trace.steps, dtype=bool)
-        torque_field = None
-        if goal.target_forces or goal.torque_limits:
-            trace, null_space, torque_field = self._settle_torques(goal, net, trace)
-        return self._make_plan(goal, net, trace, null_space, torque_field, attempts,
-                               used_memory, t0)
+        return trace, attempts, used_memory
 
     def _reached(self, trace: RelaxationTrace) -> bool:
         c = self.config
@@ -343,7 +365,10 @@ class PmpPlanner:
         return merged, null_space, field
 
     # ------------------------------------------------------------------ result
-    def _make_plan(self, goal, net, trace, null_space, torque_field, attempts, used_memory, t0):
+    def _make_plan(self, goal, net, trace, null_space, torque_field, attempts, used_memory, t0,
+                   body_net: PmpNetwork | None = None):
+        """The sampled plan of ``trace``; ``body_net``: the network with the arms' volumes
+        when ``net`` (hand frames only) replaced it (their clearance is then reported)."""
         c = self.config
         tau = goal.tau if goal.tau is not None else c.tau
         tbg = TimeBaseGenerator(tau)
@@ -419,6 +444,10 @@ class PmpPlanner:
                                 not kept, bool(net.obstacles))
         if clearance is not None:
             message += f"; obstacle clearance {clearance * 1e3:.1f} mm"
+        if body_net is not None and clearance is not None:
+            body = float(body_net.body_clearances(q_full)[0].min())
+            message += (f" (hand frames only: with the arm's volume kept clear the plan did not "
+                        f"reach; the arm's volume comes within {body * 1e3:.1f} mm)")
         plan = ReachPlan(
             hands=net.hands,
             joint_names=names,
