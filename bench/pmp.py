@@ -35,6 +35,8 @@ judged by an independent forward kinematics of the sampled plan (50 scenes each,
   reached and the clearance kept) and ``obstacle_clearance_min_mm`` (smallest distance of the
   hand frame and of the hand's, wrist's and forearm's collision hulls to the surface over the
   successful plans; scenes where that arm starts within the clearance are skipped);
+  ``obstacle_hand_frames_only_rate``: scenes answered with the hand frames kept clear only
+  (no plan keeping the arm's volume clear reached; decision 0063);
 - force targets (Sect. 2.3, Fig 3): the same kind of targets with a 10 N force in a random
   direction; the joint needing the largest fraction of its rating is limited to half the torque
   the free plan needs there: ``force_target_torque_ok_rate`` = plans reaching the target with
@@ -233,7 +235,7 @@ def run_obstacles(planner: PmpPlanner, n: int, seed: int, clearance: float = 0.0
     rng = np.random.default_rng(seed)
     rest = planner.start_configuration(None)
     start = _hands_at(planner, rest)[1]
-    success, kept, through, times = [], [], 0, []
+    success, kept, through, times, hand_only = [], [], 0, [], 0
     hulls = ArmBodyModel.from_urdf(planner.provider, links=OBSTACLE_LINKS).hulls["right"]
     while len(success) < n:
         target = _right_targets(planner, rng, 0.15)
@@ -254,6 +256,7 @@ def run_obstacles(planner: PmpPlanner, n: int, seed: int, clearance: float = 0.0
         t0 = time.perf_counter()
         plan = planner.plan(goal, rest)
         times.append(time.perf_counter() - t0)
+        hand_only += plan.hand_frames_only
         final = _hands_at(planner, plan.q_final)[1]
         d = min(float(np.min(ob.surface_distance(plan.hand_paths["right"]))),
                 float(hull_distances(planner.provider, hulls,
@@ -264,6 +267,7 @@ def run_obstacles(planner: PmpPlanner, n: int, seed: int, clearance: float = 0.0
         kept.append(d if reached else np.inf)
     kept_ok = [k for k, s in zip(kept, success) if s]
     return {"success": float(np.mean(success)), "through": through / n,
+            "hand_frames_only": hand_only / n,
             "clearance_min": min(kept_ok) if kept_ok else float("nan"),
             "times": np.array(times) * 1e3}
 
@@ -445,6 +449,7 @@ def main() -> None:
         "obstacle_success_rate": obstacles["success"],
         "obstacle_clearance_min_mm": float(obstacles["clearance_min"] * 1e3),
         "obstacle_free_plan_through_rate": float(obstacles["through"]),
+        "obstacle_hand_frames_only_rate": float(obstacles["hand_frames_only"]),
         "obstacle_plan_ms_median": float(np.median(obstacles["times"])),
         "force_target_torque_ok_rate": forces["ok"],
         "force_target_free_plan_ok_rate": forces["free_ok"],

@@ -470,6 +470,7 @@ class PmpPlanner:
             obstacle_clearance=clearance,
             final_torques=final_torques,
             torque_limits=torque_limits,
+            hand_frames_only=body_net is not None,
         )
         return plan
 

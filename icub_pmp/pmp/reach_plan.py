@@ -44,6 +44,8 @@ class ReachPlan:
             + gravity) over the network's joints (the first n of ``joint_names``; None
             without target forces or torque limits).
         torque_limits: (n,) the limits [N m] they were held to (None likewise).
+        hand_frames_only: with obstacles, no plan keeping the arms' volumes clear reached, and
+            this one keeps the hand frames clear only (decision 0063).
         attempts: relaxations run (1 + those guided by remembered postures).
         used_memory: whether the posture-memory relaxation gave the returned plan.
     """
@@ -68,6 +70,7 @@ class ReachPlan:
     obstacle_clearance: float | None = None
     final_torques: np.ndarray | None = None
     torque_limits: np.ndarray | None = None
+    hand_frames_only: bool = False
     path_function: Callable[[], Mapping[str, np.ndarray]] | None = dataclasses.field(
         default=None, repr=False, compare=False
     )
