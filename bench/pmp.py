@@ -32,8 +32,11 @@ judged by an independent forward kinematics of the sampled plan (50 scenes each,
   sent to independent targets moved by the same offset (the demo's former transport);
 - obstacles: a random right-hand target (a random right-arm posture), a sphere (radius 2-4 cm)
   centred on the free plan's mid-path point, clearance 2 cm: ``obstacle_success_rate`` (target
-  reached and the clearance kept) and ``obstacle_clearance_min_mm`` (smallest hand-to-surface
-  distance over the successful plans);
+  reached and the clearance kept) and ``obstacle_clearance_min_mm`` (smallest distance of the
+  hand frame and of the hand's, wrist's and forearm's collision hulls to the surface over the
+  successful plans; scenes where that arm starts within the clearance are skipped);
+  ``obstacle_hand_frames_only_rate``: scenes answered with the hand frames kept clear only
+  (no plan keeping the arm's volume clear reached; decision 0063);
 - force targets (Sect. 2.3, Fig 3): the same kind of targets with a 10 N force in a random
   direction; the joint needing the largest fraction of its rating is limited to half the torque
   the free plan needs there: ``force_target_torque_ok_rate`` = plans reaching the target with
@@ -56,6 +59,7 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from icub_pmp.baselines import PMP_DLS_CONFIG, DlsSolver  # noqa: E402
+from icub_pmp.peripersonal import ArmBodyModel  # noqa: E402
 from icub_pmp.pmp import (  # noqa: E402
     HeldObject,
     ObstacleField,
@@ -63,6 +67,7 @@ from icub_pmp.pmp import (  # noqa: E402
     ReachGoal,
     TimeBaseGenerator,
 )
+from icub_pmp.pmp.body_volume import hull_distances  # noqa: E402
 from icub_pmp.ros.reach_request import ReachRequestConfig  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -219,13 +224,19 @@ def _right_targets(planner: PmpPlanner, rng, min_dist: float) -> np.ndarray:
             return x
 
 
+#: the right arm's links whose collision hulls (what the physics collides) the obstacle scenes
+#: judge, besides the hand frame
+OBSTACLE_LINKS = ("hand", "wrist_1", "forearm")
+
+
 def run_obstacles(planner: PmpPlanner, n: int, seed: int, clearance: float = 0.02) -> dict:
     """A sphere on the free plan's path; plan around it with the clearance."""
     cfg = ReachRequestConfig()
     rng = np.random.default_rng(seed)
     rest = planner.start_configuration(None)
     start = _hands_at(planner, rest)[1]
-    success, kept, through, times = [], [], 0, []
+    success, kept, through, times, hand_only = [], [], 0, [], 0
+    hulls = ArmBodyModel.from_urdf(planner.provider, links=OBSTACLE_LINKS).hulls["right"]
     while len(success) < n:
         target = _right_targets(planner, rng, 0.15)
         free = planner.plan(ReachGoal(targets={"right": target}, tau=TAU), rest)
@@ -236,20 +247,27 @@ def run_obstacles(planner: PmpPlanner, n: int, seed: int, clearance: float = 0.0
         if min(np.linalg.norm(start - centre), np.linalg.norm(target - centre)) < \
                 radius + clearance + 0.01:
             continue  # start or target within the clearance: the request would be rejected
-        through += np.min(np.linalg.norm(path - centre, axis=1)) < radius
         ob = ObstacleField(centre, radius, cfg.obstacle_influence, cfg.obstacle_gain,
                            inflation=clearance + cfg.obstacle_margin)
+        goal = ReachGoal(targets={"right": target}, tau=TAU, obstacles=(ob,))
+        if planner.build_network(goal, rest).body_clearances(rest[None])[1][0] < 0.0:
+            continue  # the arm (hand, wrist, forearm) starts within the clearance
+        through += np.min(np.linalg.norm(path - centre, axis=1)) < radius
         t0 = time.perf_counter()
-        plan = planner.plan(ReachGoal(targets={"right": target}, tau=TAU, obstacles=(ob,)),
-                            rest)
+        plan = planner.plan(goal, rest)
         times.append(time.perf_counter() - t0)
+        hand_only += plan.hand_frames_only
         final = _hands_at(planner, plan.q_final)[1]
-        d = float(np.min(ob.surface_distance(plan.hand_paths["right"])))
+        d = min(float(np.min(ob.surface_distance(plan.hand_paths["right"]))),
+                float(hull_distances(planner.provider, hulls,
+                                     plan.configurations(planner.provider.joint_names),
+                                     ob).min()))
         reached = np.linalg.norm(final - target) <= SUCCESS
         success.append(bool(reached and d >= clearance))
         kept.append(d if reached else np.inf)
     kept_ok = [k for k, s in zip(kept, success) if s]
     return {"success": float(np.mean(success)), "through": through / n,
+            "hand_frames_only": hand_only / n,
             "clearance_min": min(kept_ok) if kept_ok else float("nan"),
             "times": np.array(times) * 1e3}
 
@@ -431,6 +449,7 @@ def main() -> None:
         "obstacle_success_rate": obstacles["success"],
         "obstacle_clearance_min_mm": float(obstacles["clearance_min"] * 1e3),
         "obstacle_free_plan_through_rate": float(obstacles["through"]),
+        "obstacle_hand_frames_only_rate": float(obstacles["hand_frames_only"]),
         "obstacle_plan_ms_median": float(np.median(obstacles["times"])),
         "force_target_torque_ok_rate": forces["ok"],
         "force_target_free_plan_ok_rate": forces["free_ok"],

@@ -12,7 +12,7 @@ from icub_pmp.demo.scenario import (
     judge_obstacle_reach,
     judge_press,
     judge_transport,
-    press_compliance_scale,
+    press_compliance_update,
 )
 
 
@@ -67,14 +67,17 @@ def test_press_is_judged_on_the_estimate_against_the_target_force():
     assert not ok and "no valid target force" in msg
 
 
-def test_press_compliance_scale_is_the_measured_secant():
-    """Two presses 2.4 mm apart along the force that raised it by 1.2 N measure 2 mm/N: twice
-    a 1 mm/N model; without a previous press, or when the force did not rise, the model is
-    kept (1); the factor is bounded."""
-    down = np.array([0.0, 0.0, -1.0])
-    a = (np.array([0.0, 0.0, -0.0588]), 6.95)
-    b = (np.array([0.0, 0.0, -0.0612]), 8.15)
-    assert abs(press_compliance_scale(a, b, 0.001, down) - 2.0) < 1e-6
-    assert press_compliance_scale(None, b, 0.001, down) == 1.0
-    assert press_compliance_scale(b, a, 0.001, down) == 1.0
-    assert press_compliance_scale(a, b, 1e-6, down) == 5.0
+def test_press_compliance_update_fits_the_measured_force_changes():
+    """Broyden's update: after a press that moved the target 2.4 mm down and raised the
+    downward force by 1.2 N and pushed 0.3 N sideways, the compliance maps that force change
+    to that motion exactly (2 mm/N down where the model said 1); a force change too small to
+    tell, or one that would make the compliance non-positive, keeps the model."""
+    C = np.eye(3) * 0.001
+    dx = np.array([0.0, 0.0, -0.0024])
+    dF = np.array([0.0, 0.3, -1.2])
+    new = press_compliance_update(C, dx, dF)
+    assert np.allclose(new @ dF, dx)
+    assert float(dF @ new @ dF) > 0.0
+    assert np.allclose(new @ np.array([1.0, 0.0, 0.0]), C @ np.array([1.0, 0.0, 0.0]))
+    assert press_compliance_update(C, dx, np.array([0.0, 0.0, -0.2])) is C
+    assert press_compliance_update(C, -10 * dx, dF) is C

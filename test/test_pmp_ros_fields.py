@@ -21,6 +21,10 @@ from icub_pmp.testing import NodeProcess, repo_root, run_icub
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 TARGET = (-0.28, 0.10, 0.20)  # right hand target [m], root_link, ~0.2 m from the rest hand
+#: the obstacle scene's target [m, root_link], 0.2 m from the rest hand, mostly sideways: the
+#: obstacle on the hand's way leaves room for the forearm, which trails behind the hand (going
+#: up to TARGET, the forearm ends where the hand passed half way: no room for the arm's volume)
+OBSTACLE_TARGET = (-0.30, 0.0, 0.15)
 
 
 @pytest.fixture(scope="module")
@@ -113,22 +117,25 @@ def test_coupled_transport_keeps_the_grasp(node, ros_probe, model):
 
 def test_obstacle_between_hand_and_target_is_avoided_with_the_clearance(node, ros_probe, model):
     """A sphere placed on the unconstrained path (which goes through it) is avoided: the plan
-    reaches the target and every trajectory point keeps the asked clearance from the sphere;
-    the answer reports that clearance."""
-    free = call(ros_probe, node, request())
+    reaches the target and every trajectory point keeps the asked clearance from the sphere,
+    the hand's and the arm's volume's (hand, wrist, forearm hulls); the answer reports that
+    clearance."""
+    free = call(ros_probe, node, request(right=OBSTACLE_TARGET))
     assert free.success, free.message
     assert free.obstacle_clearance == -1.0 and len(free.object_path) == 0
     path = hand_path(model, free, "right")
-    centre, radius, clearance = path[len(path) // 2], 0.03, 0.02
+    centre, radius, clearance = path[int(0.4 * (len(path) - 1))], 0.03, 0.02
     assert np.min(np.linalg.norm(path - centre, axis=1)) - radius < 0  # goes through it
-    resp = call(ros_probe, node, request(obstacles=[sphere(centre, radius)],
-                                         obstacle_clearance=clearance))
+    resp = call(ros_probe, node, request(right=OBSTACLE_TARGET, obstacles=[
+        sphere(centre, radius)], obstacle_clearance=clearance))
     assert resp.success, resp.message
     path = hand_path(model, resp, "right")
     kept = np.min(np.linalg.norm(path - centre, axis=1)) - radius
     assert kept >= clearance - 1e-3, kept
+    # the reported clearance is the arm volume's (not the hand frames' alone: decision 0063)
     assert resp.obstacle_clearance >= clearance and "obstacle clearance" in resp.message
-    assert np.linalg.norm(path[-1] - TARGET) < 1e-3
+    assert "hand frames only" not in resp.message, resp.message
+    assert np.linalg.norm(path[-1] - OBSTACLE_TARGET) < 1e-3
 
     # a wall (a thin box 60 x 60 cm) across the way: no path, said so, not executed
     start = hand_path(model, free, "right")[0]
@@ -262,11 +269,13 @@ def test_cli_flags_reach_the_planner(node, ros_probe, model):
     end = _value(out.stdout, "object path:").split("ends at (")[1].split(")")[0]
     assert np.linalg.norm(np.array([float(v) for v in end.split(",")]) - goal) < 0.002
 
-    out = run_icub("reach", "right=-0.28,0.10,0.20", "--obstacle",
-                   "sphere:-0.29,0.15,0.11,0.03", "--obstacle", "box:0.2,0.0,0.0,0.1,0.1,0.1",
+    # the sphere on the hand's way to OBSTACLE_TARGET, with room for the arm's volume
+    out = run_icub("reach", "right=-0.30,0.0,0.15", "--obstacle",
+                   "sphere:-0.325,0.123,0.044,0.03", "--obstacle", "box:0.2,0.0,0.0,0.1,0.1,0.1",
                    "--clearance", "0.02", "--simulate")
     assert out.returncode == 0, out.stdout + out.stderr
     assert float(_value(out.stdout, "obstacle clearance:").split()[0]) >= 20.0
+    assert "hand frames only" not in out.stdout, out.stdout
 
     out = run_icub("reach", "right=-0.28,0.10,0.20", "--force", "0,0,-10", "--torque-limit",
                    "r_elbow=0.25", "--simulate")

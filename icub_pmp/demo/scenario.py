@@ -24,13 +24,16 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
 4. ``cartesian_reach``: the same target reached with the IPOPT Cartesian solver (eq 11).
 5. ``obstacle_reach``: the cylinder is placed on the table between the right hand and its
    target; the reach goes through /pmp/reach_action with the cylinder as an obstacle (its
-   ground-truth pose, as a perception node would publish it) and a clearance. Judged in the
-   physics (:func:`judge_obstacle_reach`): the hand within 1 cm of the target, no contact of
-   any link with the cylinder (/ground_truth/object_contacts) and the cylinder not moved.
+   ground-truth pose, as a perception node would publish it) and a clearance the planner
+   keeps for the hand's, wrist's and forearm's collision hulls (the fingers included). Judged
+   in the physics (:func:`judge_obstacle_reach`): the hand within 1 cm of the target, no
+   contact of any link with the cylinder (/ground_truth/object_contacts) and the cylinder not
+   moved.
 6. ``press``: the right hand presses down on the table top with 10 N: the position-mode joint
    springs realise a force through a target beyond the contact (``x_contact + C F``, the
-   hand's compliance ``C = J K^-1 J^T``), corrected from the wrench estimator's force; the goals
-   carry the force target (``right_force``). Judged by :func:`judge_press`: the estimated
+   hand's compliance ``C = J K^-1 J^T``), corrected from the wrench estimator's force with a
+   compliance fitted to the measured force changes (Broyden); the goals carry the force
+   target (``right_force``). Judged by :func:`judge_press`: the estimated
    external force within 10 % of the target, reported beside the simulator's contact force.
 
 7. ``tabletop`` (with ``--tabletop``): the two arms' tabletop task of issue 19
@@ -65,6 +68,7 @@ from icub_pmp.graph import (
     reserve_domain_id,
     ros_environment,
 )
+from icub_pmp.kinematics import IcubModel
 from icub_pmp.ros.conversions import time_to_sec
 from icub_pmp.ros.probe import RosProbe
 
@@ -433,15 +437,18 @@ def cylinder_obstacle(position: np.ndarray) -> object:
 
 
 #: phase 5: the right hand's start and target on either side of the cylinder, placed between
-#: them on the table [m, root_link], and the clearance the plan keeps from it [m]
-#: (the straight way passes 2 cm below the cylinder's top; the plan goes over it. Placed beside
-#: the hand's way rather than ahead of it: only the hand is kept clear by the planner, and the
-#: forearm trailing a hand that goes around an object ahead of it swept the object in trials;
-#: with a 6 cm clearance a demo run's fingers still brushed its top)
-OBSTACLE_START = np.array([-0.36, 0.34, 0.02])
-OBSTACLE_TARGET = np.array([-0.36, 0.02, 0.02])
+#: them on the table [m, root_link], and the clearance the plan keeps from it [m]: the planner
+#: keeps the hand's, wrist's and forearm's collision hulls that far (``obstacle_body_links``,
+#: docs/decisions/0060; with only the hand frame kept clear the fingers, up to 10 cm from it,
+#: brushed the cylinder's top in demo runs). The straight way passes the hand frame 1-3 cm
+#: above the top, the fingers 4 cm below the frame through it. The target is raised so that
+#: the forearm, which ends above the cylinder, clears it without turning the wrist fast near
+#: the end (at 2 cm the plan turned r_wrist_prosup at 5.6 rad/s, and the hand ended 3.7 cm
+#: off in the physics).
+OBSTACLE_START = np.array([-0.36, 0.34, 0.04])
+OBSTACLE_TARGET = np.array([-0.36, 0.0, 0.06])
 OBSTACLE_POSITION = np.array([-0.36, 0.17, -0.03])
-OBSTACLE_CLEARANCE = 0.09
+OBSTACLE_CLEARANCE = 0.02
 
 
 def obstacle_reach(runner: DemoRunner, name: str = "obstacle_reach") -> PhaseResult:
@@ -491,89 +498,150 @@ def joint_stiffness(joints: list[str]) -> dict[str, float]:
 #: surface z = -0.09, config/sim_bridge.yaml) and the force it exerts on it [N]
 PRESS_POINT = np.array([-0.30, 0.15, -0.09])
 PRESS_FORCE = np.array([0.0, 0.0, -10.0])
-PRESS_ITERATIONS = 4
+#: the force loop: at most PRESS_MAX_ITERATIONS corrected presses, stopping once the estimate
+#: is within PRESS_STOP_TOLERANCE of the target (below the judged PRESS_FORCE_TOLERANCE)
+PRESS_MAX_ITERATIONS = 8
+PRESS_STOP_TOLERANCE = 0.04
 #: where the cylinder waits during the press (far corner of the table) [m, root_link]
 PRESS_CYLINDER_AWAY = np.array([-0.56, 0.38, -0.03])
 
 
-def press_compliance_scale(previous: tuple[np.ndarray, float] | None,
-                           current: tuple[np.ndarray, float], model: float,
-                           direction: np.ndarray) -> float:
-    """Factor on the model's compliance from the last two presses (a secant): the target
-    moved by ``dx`` along ``direction`` and the exerted force changed by ``dF`` [N], so the
-    arm and contact together yield ``dx / dF`` [m/N] against ``model`` (``f^T C f``); 1 when
-    there is no previous press or the change is too small to tell, else within [0.5, 5].
+def press_compliance_update(C: np.ndarray, dx: np.ndarray, dF: np.ndarray,
+                            min_change: float = 0.3) -> np.ndarray:
+    """Broyden's update of the press compliance ``C`` (3, 3) [m/N] from one more press: the
+    target moved by ``dx`` (3,) [m] and the force the hand exerts changed by ``dF`` (3,) [N];
+    the updated matrix maps ``dF`` to ``dx`` exactly and is unchanged across ``dF``. Kept as
+    it is when the force changed by less than ``min_change`` [N] (too little to tell) or when
+    the update would make the compliance along ``dF`` non-positive (a contact that slipped)."""
+    C = np.asarray(C, float)
+    dx, dF = np.asarray(dx, float), np.asarray(dF, float)
+    n2 = float(dF @ dF)
+    if not np.all(np.isfinite(dx)) or not np.all(np.isfinite(dF)) or n2 < min_change**2:
+        return C
+    new = C + np.outer(dx - C @ dF, dF) / n2
+    if not float(dF @ new @ dF) > 0.0:
+        return C
+    return new
 
-    Args:
-        previous, current: (target (3,) [m], exerted force along ``direction`` [N]).
-        model: the model's compliance along ``direction`` [m/N] (> 0).
-        direction: (3,) unit vector of the target force.
-    """
-    if previous is None or not model > 0.0:
-        return 1.0
-    dx = float((np.asarray(current[0]) - np.asarray(previous[0])) @ direction)
-    dF = current[1] - previous[1]
-    if dF < 0.5 or dx <= 0.0:
-        return 1.0
-    return float(np.clip(dx / dF / model, 0.5, 5.0))
+
+def hand_contact_point(model: IcubModel, q: np.ndarray, link: str = "r_hand") -> np.ndarray:
+    """The lowest point (3,) [m, root_link] of ``link``'s collision hull at posture ``q``:
+    where a hand lowered onto the table touches it (the fingertips, up to 6 cm below the hand
+    frame in the demo's press posture)."""
+    from icub_pmp.geometry import LinkHull
+
+    hull = _hand_hulls().get(link)
+    if not isinstance(hull, LinkHull):
+        raise KeyError(f"no collision hull for {link}")
+    pose = model.frame_pose(q, link)
+    pts = hull.points @ np.asarray(pose.rotation).T + np.asarray(pose.translation)
+    return pts[int(np.argmin(pts[:, 2]))]
+
+
+def _hand_hulls() -> dict:
+    """link -> LinkHull of both hands' collision meshes (built once)."""
+    if not hasattr(_hand_hulls, "cache"):
+        from icub_pmp.geometry import urdf_link_hulls
+        from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
+
+        spec = RobotSpec.load()
+        _hand_hulls.cache = {h.frame: h for arm in HANDS
+                             for h in urdf_link_hulls(spec, arm, ("hand",))}
+    return _hand_hulls.cache
+
+
+def contact_compliance(model: IcubModel, q: np.ndarray, frame: str, contact: np.ndarray,
+                       joint_stiffness: dict[str, float]) -> np.ndarray:
+    """``C = J_h K^-1 J_c^T`` (3, 3) [m/N]: how far the set-point of ``frame``'s origin must go
+    beyond its measured position for the joint springs to push with a force at ``contact``
+    (3,) [m] on the same link (``J_c = J_v - [c - x_h]x J_w``)."""
+    names = list(joint_stiffness)
+    k = np.array([joint_stiffness[n] for n in names], dtype=float)
+    J = model.frame_jacobian(q, frame)[:, model.indices(names)]
+    r = np.asarray(contact, float) - model.frame_position(q, frame)
+    skew = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    Jc = J[:3] - skew @ J[3:]
+    return (J[:3] / k) @ Jc.T
 
 
 def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     """Phase 6: the right hand presses down on the table top with ``PRESS_FORCE``.
 
     The controller is a joint spring (position mode, ``tau = -K (q - q_d) + g``): a force is
-    realised by a target beyond the surface, ``x_contact + C F`` with the hand's compliance
-    ``C = J K^-1 J^T`` at the measured contact posture (:func:`hand_compliance`). The hand goes
-    above the point, down onto the table (the contact posture is measured), then
-    ``PRESS_ITERATIONS`` reaches through /pmp/reach_action with the force target
+    realised by a target beyond the surface, ``x_contact + C F`` with the compliance
+    ``C = J_h K^-1 J_c^T`` of the hand frame for a force at the contact point (the lowest
+    point of the hand's collision hull: the fingertips, about 6 cm below the frame;
+    :func:`contact_compliance`). The hand goes above the point, down until the fingertips
+    touch the table (:func:`hand_contact_point`; the contact posture is measured), then up to
+    ``PRESS_MAX_ITERATIONS`` reaches through /pmp/reach_action with the force target
     (``right_force``: the plan's torques at the final posture are checked against the limits)
     correct the target by ``C (F - F_measured)`` from the wrench estimator's force (an outer
-    force loop on the estimate, as the iCub's force control closes it on the FT sensors).
-    Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the simulator's
-    contact force reported beside it."""
-    from icub_pmp.control.hand_compliance import hand_compliance
-
+    force loop on the estimate, as the iCub's force control closes it on the FT sensors),
+    until the estimate is within ``PRESS_STOP_TOLERANCE``. The model leaves out the contact's
+    friction and the hand turning about it: after each press Broyden's update
+    (:func:`press_compliance_update`) fits ``C`` to the measured force changes, in all three
+    directions (the sideways force of friction included).
+    Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the
+    simulator's contact force reported beside it."""
     spec = runner.model.spec
     stiffness = joint_stiffness(list(spec.torso_joints) + list(spec.arm_joints("right")))
     frame = spec.hand_frame("right")
     runner.set_object("cylinder", PRESS_CYLINDER_AWAY)  # phase 5 left it beside the point
     runner.pmp_reach(f"{name}_above", {"right": PRESS_POINT + [0.0, 0.0, 0.08]},
                      use_torso=True, tau=1.5, judge_physics=False)
-    runner.pmp_reach(f"{name}_touch", {"right": PRESS_POINT}, use_torso=True, tau=1.5,
-                     judge_physics=False)
-    runner.wait_sim(0.3)
-    t = runner.sim_time()
-    runner.wait_sim(0.3)
-    estimated = runner.force_since("right", t)
-    contact = runner.hand_positions()["right"]  # the hand at the measured contact posture
-    C = hand_compliance(runner.model, runner.q(), frame, stiffness)
-    target = contact + C @ PRESS_FORCE
-    results = []
-    f = PRESS_FORCE / np.linalg.norm(PRESS_FORCE)
-    presses: list[tuple[np.ndarray, float]] = []  # (target, exerted force along f) per press
-    for k in range(PRESS_ITERATIONS):
-        if k:  # correct by the force still missing (the estimate is the world on the hand)
-            C = hand_compliance(runner.model, runner.q(), frame, stiffness)
-            scale = press_compliance_scale(presses[-2] if k > 1 else None, presses[-1],
-                                           float(f @ C @ f), f)
-            target = target + scale * C @ (PRESS_FORCE + estimated)
-        results.append(runner.pmp_reach(
-            name if k == PRESS_ITERATIONS - 1 else f"{name}_{k}", {"right": target},
-            use_torso=True, tau=1.0, judge_physics=False, forces={"right": PRESS_FORCE}))
+    # touch: the hand frame lowered until its hull's lowest point (the fingertips) is 3 mm
+    # into the table top, then 1 cm further while the estimator feels less than 1 N
+    above = runner.hand_positions()["right"]
+    drop = above[2] - hand_contact_point(runner.model, runner.q())[2]
+    touch = PRESS_POINT + [0.0, 0.0, drop - 0.003]
+    for _ in range(4):
+        runner.pmp_reach(f"{name}_touch", {"right": touch}, use_torso=True, tau=1.5,
+                         judge_physics=False)
         runner.wait_sim(0.3)
         t = runner.sim_time()
         runner.wait_sim(0.3)
         estimated = runner.force_since("right", t)
-        presses.append((target.copy(), float(-estimated @ f)))
-    r = results[-1]
+        if float(-estimated @ PRESS_FORCE) / float(np.linalg.norm(PRESS_FORCE)) >= 1.0:
+            break
+        touch = touch + [0.0, 0.0, -0.01]
+    contact = runner.hand_positions()["right"]  # the hand at the measured contact posture
+    q = runner.q()
+    C = contact_compliance(runner.model, q, frame, hand_contact_point(runner.model, q),
+                           stiffness)
+    # the first press: from the measured contact, as if no force were exerted yet
+    target = contact + C @ (PRESS_FORCE + estimated)
+    norm = float(np.linalg.norm(PRESS_FORCE))
+    previous = (contact, -estimated)
+    r = None
+    errors = []
+    for k in range(PRESS_MAX_ITERATIONS):
+        r = runner.pmp_reach(f"{name}_{k}", {"right": target}, use_torso=True, tau=1.0,
+                             judge_physics=False, forces={"right": PRESS_FORCE})
+        runner.wait_sim(0.3)
+        t = runner.sim_time()
+        runner.wait_sim(0.3)
+        estimated = runner.force_since("right", t)
+        exerted = -estimated
+        errors.append(float(np.linalg.norm(exerted - PRESS_FORCE)) / norm)
+        if errors[-1] <= PRESS_STOP_TOLERANCE:
+            break
+        C = press_compliance_update(C, target - previous[0], exerted - previous[1])
+        previous = (target.copy(), exerted)
+        target = target + C @ (PRESS_FORCE - exerted)
+    if r is None:  # PRESS_MAX_ITERATIONS < 1
+        raise RuntimeError("press: no press was made")
+    r.name = name
     r.extra["press_depth_m"] = float(np.linalg.norm(target - contact))
+    r.extra["press_iterations"] = float(len(errors))
+    r.extra["press_first_error_rel"] = errors[0]
+    r.extra.update({f"press_error_rel_{k}": e for k, e in enumerate(errors)})
     gt = runner.latest.get("gt_right")
     truth = None if gt is None else np.array([gt.wrench.force.x, gt.wrench.force.y,
                                               gt.wrench.force.z])
     ok, message, figures = judge_press(estimated, PRESS_FORCE, truth)
     r.extra.update(figures)
     r.success = bool(r.success and ok)
-    r.message = f"{message} ({r.message})"
+    r.message = f"{message} after {len(errors)} presses ({r.message})"
     # lift the hand off the table
     runner.pmp_reach(f"{name}_off", {"right": PRESS_POINT + [0.0, 0.0, 0.08]},
                      use_torso=True, tau=1.0, judge_physics=False)

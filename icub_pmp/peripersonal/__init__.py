@@ -3,9 +3,9 @@ of each arm's reachable space, the shared workspace, neural activity and reward 
 target allocation, empty areas and the imagined collision check of two reaches. No ROS
 imports."""
 
+from icub_pmp.geometry import Capsule, LinkHull, fit_capsule, fit_capsules
 from icub_pmp.peripersonal.analytic_babbling import Babbling, analytic_babbling
 from icub_pmp.peripersonal.arm_body_model import ArmBodyModel
-from icub_pmp.peripersonal.capsule import Capsule, fit_capsule, fit_capsules
 from icub_pmp.peripersonal.collision_check_config import CollisionCheckConfig
 from icub_pmp.peripersonal.collision_verdict import CollisionVerdict
 from icub_pmp.peripersonal.empty_area_finder import EmptyArea, EmptyAreaFinder
@@ -13,7 +13,6 @@ from icub_pmp.peripersonal.exceptions import MapNotTrained, NoEmptyArea
 from icub_pmp.peripersonal.gng_config import GrowingNeuralGasConfig
 from icub_pmp.peripersonal.growing_neural_gas import GngTrainingReport, GrowingNeuralGas
 from icub_pmp.peripersonal.imagined_collision_check import ImaginedCollisionCheck
-from icub_pmp.peripersonal.link_hull import LinkHull
 from icub_pmp.peripersonal.neural_activity import neural_activity
 from icub_pmp.peripersonal.pair_plan import PairPlan, PairSchedule, ScheduleStep
 from icub_pmp.peripersonal.peripersonal_config import PeripersonalConfig

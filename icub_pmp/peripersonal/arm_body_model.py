@@ -20,15 +20,13 @@ collides the convex hulls of the same meshes). Positions are in the base frame (
 
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import Mapping, Sequence
 
 import numpy as np
 
 from icub_pmp.errors import InvalidInput, UnknownName
-from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec, urdf_path
-from icub_pmp.peripersonal.capsule import Capsule, fit_capsules
-from icub_pmp.peripersonal.link_hull import LinkHull
+from icub_pmp.geometry import Capsule, LinkHull, arm_prefix, fit_capsules, urdf_link_hulls
+from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
 from icub_pmp.pmp.jacobian_provider import JacobianProvider
 
 __all__ = ["ArmBodyModel", "arm_prefix", "DEFAULT_CAPSULE_LINKS", "DEFAULT_DISTAL_FRAMES"]
@@ -37,40 +35,6 @@ __all__ = ["ArmBodyModel", "arm_prefix", "DEFAULT_CAPSULE_LINKS", "DEFAULT_DISTA
 DEFAULT_CAPSULE_LINKS = ("upper_arm", "elbow_1", "forearm", "wrist_1", "hand")
 #: the paper's distal joints: wrist and hand (frame names after the l_/r_ prefix)
 DEFAULT_DISTAL_FRAMES = ("wrist_pitch", "hand_dh_frame")
-
-
-def arm_prefix(spec: RobotSpec, arm: str) -> str:
-    """URDF name prefix of ``arm`` ('l_' or 'r_', from its first joint's name)."""
-    if arm not in HANDS:
-        raise UnknownName("arm", arm, HANDS)
-    return spec.arm_joints(arm)[0][:2]
-
-
-@lru_cache(maxsize=4)
-def _urdf_hulls(model_name: str, prefix: str, links: tuple[str, ...], spacing: float
-                ) -> tuple[LinkHull, ...]:
-    """Hulls of the collision meshes of ``prefix + link`` in the URDF (link frames)."""
-    from icub_pmp.kinematics.tri_mesh import TriMesh
-    from icub_pmp.kinematics.urdf_robot import UrdfRobot
-
-    path = urdf_path(model_name)
-    urdf = UrdfRobot(path)
-    meshes_root = path.parents[3]  # share/iCub/robots/<name>/model.urdf -> share/
-    out = []
-    for link in links:
-        name = prefix + link
-        if name not in urdf.links:
-            raise UnknownName("URDF link", name, urdf.links)
-        verts = []
-        for c in urdf.links[name].collisions:
-            if c.kind != "mesh":
-                continue
-            mesh = TriMesh.from_stl(urdf.resolve_mesh(c.mesh_file, meshes_root), c.scale)
-            verts.append(mesh.transformed(c.T_link_geom).vertices)
-        if not verts:
-            raise InvalidInput(f"URDF link {name} has no collision mesh")
-        out.append(LinkHull(name, np.vstack(verts), spacing))
-    return tuple(out)
 
 
 class ArmBodyModel:
@@ -126,9 +90,8 @@ class ArmBodyModel:
         spec = spec or RobotSpec.load()
         hulls, dist = {}, {}
         for arm in HANDS:
-            p = arm_prefix(spec, arm)
-            hulls[arm] = _urdf_hulls(spec.model_name, p, tuple(links), float(spacing))
-            dist[arm] = tuple(p + f for f in distal)
+            hulls[arm] = urdf_link_hulls(spec, arm, links, spacing)
+            dist[arm] = tuple(arm_prefix(spec, arm) + f for f in distal)
         return cls(provider, hulls, dist)
 
     # ------------------------------------------------------------------ names

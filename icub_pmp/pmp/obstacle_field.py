@@ -110,6 +110,19 @@ class ObstacleField:
         rho = max(rho, self.rho_min)
         return self.gain * (1.0 / rho - 1.0 / self.influence) / rho**2 * n
 
+    def sphere_forces(self, x, radii) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Repulsive forces (n, 3) [N] on spheres centred at ``x`` (n, 3) [m] with ``radii``
+        (n,) [m] (the field of :meth:`force` with the clearance reduced by each radius), their
+        clearances (n,) [m] (< 0: closer than the clearance to keep) and the field's stiffness
+        along the normal ``-d|F|/d rho`` (n,) [N/m] (0 outside the influence)."""
+        dist, n = self._surface(np.asarray(x, dtype=float))
+        rho = dist - self.inflation - np.asarray(radii, dtype=float)
+        r = np.maximum(rho, self.rho_min)
+        inside = rho < self.influence
+        mag = np.where(inside, self.gain * (1.0 / r - 1.0 / self.influence) / r**2, 0.0)
+        stiff = np.where(inside, self.gain * (3.0 / r**4 - 2.0 / (self.influence * r**3)), 0.0)
+        return mag[:, None] * n, rho, np.maximum(stiff, 0.0)
+
     def potential(self, x) -> float:
         """FIRAS potential [J] at ``x``."""
         rho = max(float(self.clearance(x)), self.rho_min)

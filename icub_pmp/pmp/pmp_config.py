@@ -57,6 +57,11 @@ class PmpConfig(ConfigBase):
     boundary_fraction: float = 0.99  # max fraction of the distance to a limit per step
     obstacle_step: float = 0.01  # [m] with obstacles: step control, hand motion per step (the
     # sampled plan then follows the relaxation's path around them); 0 = as without obstacles
+    obstacle_body_links: tuple[str, ...] = ("hand", "wrist_1", "forearm")  # links (after the
+    # l_/r_ prefix) whose collision hulls the obstacle fields keep clear, as spheres
+    # (BodyVolume); () = the hand frames only
+    obstacle_body_null_distance: float = 0.05  # [m] within this of its target a hand's body
+    # fields act in the null space of its position only (the equilibrium stays on the target)
     # success (mental simulation verdict)
     success_tolerance: float = 1.0e-3  # hand within this of its target at tau [m]
     rotation_success_tolerance: float = 0.01  # [rad]
@@ -91,7 +96,8 @@ class PmpConfig(ConfigBase):
             if not math.isfinite(v) or v <= 0:
                 raise ConfigError(f"PmpConfig.{name}: expected a finite value > 0, got {v}")
         nonneg = ("curl", "joint_limit_alpha", "posture_field_gain", "start_tolerance",
-                  "max_displacement", "synchronise_hands", "obstacle_step", "idle_hand_margin")
+                  "max_displacement", "synchronise_hands", "obstacle_step", "idle_hand_margin",
+                  "obstacle_body_null_distance")
         for name in nonneg:
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:

@@ -21,6 +21,7 @@ from typing import Mapping, NamedTuple, Sequence, cast
 import numpy as np
 
 from icub_pmp.errors import InvalidInput
+from icub_pmp.pmp.body_volume import BodyVolume
 from icub_pmp.pmp.branch_network import BranchNetwork
 from icub_pmp.pmp.force_field import ForceField
 from icub_pmp.pmp.held_object import HeldObject
@@ -72,6 +73,11 @@ class PmpNetwork:
         held_object: object coupled to its grasping hands (Sect. 3.2), or None.
         posture: posture field (from the posture memory), or None.
         torque_field: saturation field of Sect. 2.3, or None.
+        volumes: hand -> spheres covering its arm's links (:class:`BodyVolume`): the
+            obstacle fields also act on them (their torques join the internal ones) and the
+            clearance counts them; hands without one are kept clear at their frame only.
+        volume_null_distance: [m] within this distance of its target a hand's volume
+            fields act in the null space of its position only (0 = never).
     """
 
     def __init__(
@@ -87,6 +93,8 @@ class PmpNetwork:
         held_object: HeldObject | None = None,
         posture: PostureField | None = None,
         torque_field: TorqueLimitField | None = None,
+        volumes: Mapping[str, BodyVolume] | None = None,
+        volume_null_distance: float = 0.0,
     ):
         self.provider = provider
         self.branches = branches
@@ -107,6 +115,8 @@ class PmpNetwork:
         self.held_object = held_object
         self.posture = posture
         self.torque_field = torque_field
+        self.volumes = {h: v for h, v in (volumes or {}).items() if h in self.hands}
+        self.volume_null_distance = float(volume_null_distance)
         coupled = set(held_object.hands) if held_object else set()
         for h in coupled:
             if h not in self.hands:
@@ -323,11 +333,90 @@ class PmpNetwork:
                     force[r0:r0 + 3] += ob.force(pos[i])
                     clearance = min(clearance, float(ob.clearance(pos[i])))
         torque, stiff, excess = self._internal(z, q, s)
+        if self.obstacles and self.volumes:
+            body_torque, body_stiff, body_clearance = self._volume_fields(q, kin, pos)
+            torque = torque.copy()
+            torque[: self.n] += body_torque
+            stiff = stiff.copy()
+            stiff[: self.n] += body_stiff
+            clearance = min(clearance, body_clearance)
         d = self._final_targets - pos
         pos_err = np.sqrt((d * d).sum(axis=1))
         return NetworkState(
             force, g, torque, stiff, pos, rot, pos_err, rot_err, clearance, excess
         )
+
+    def _volume_fields(self, q: np.ndarray, kin, pos: np.ndarray  # noqa: ANN001
+                       ) -> tuple[np.ndarray, np.ndarray, float]:
+        """Torques (n,) of the obstacle fields on the body volumes' spheres at ``q``, their
+        diagonal joint stiffness (n,) and the smallest sphere clearance [m] (to the grown
+        obstacles). From twice
+        ``volume_null_distance`` of its target to that distance, a hand's volume torques fade
+        into the null space of its position task
+        (``T - J^T (J A J^T)^-1 J A T``): the arm still turns its fingers and forearm away, but
+        no longer pushes the hand off the target (the equilibrium stays on it, as
+        :meth:`ObstacleField.clear_of` keeps it for the hand frame)."""
+        torque = np.zeros(self.n)
+        stiffness = np.zeros(self.n)
+        clearance = np.inf
+        a = self.admittance[: self.n]
+        for hand, vol in self.volumes.items():
+            vk = self.provider.kinematics(q, vol.frames)
+            pts = vol.positions(vk)
+            forces = np.zeros_like(pts)
+            k_normal = []
+            for ob in self.obstacles:
+                f, rho, k = ob.sphere_forces(pts, vol.radii)
+                forces += f
+                k_normal.append((f, k))
+                clearance = min(clearance, float(rho.min()))
+            if not np.any(forces):
+                continue
+            t = vol.torques(vk, forces)[self.joint_index]
+            # the fields' stiffness along their normals, on the joints' diagonal (the implicit
+            # step then slides along the obstacle instead of bouncing off it)
+            jp = vol.jacobians(vk)[:, :, self.joint_index]  # (n, 3, joints)
+            for f, k in k_normal:
+                live = k > 0
+                if np.any(live):
+                    nrm = f[live] / np.maximum(np.linalg.norm(f[live], axis=1), 1e-12)[:, None]
+                    proj = np.einsum("ni,nij->nj", nrm, jp[live])
+                    stiffness += (k[live][:, None] * proj**2).sum(axis=0)
+            i = self.hands.index(hand)
+            err = float(np.linalg.norm(self._final_targets[i] - pos[i]))
+            d = self.volume_null_distance
+            w = min(max(err / d - 1.0, 0.0), 1.0) if d > 0 else 1.0
+            if w < 1.0:
+                jac = kin.jacobians[i, :3][:, self.joint_index]
+                m = (jac * a) @ jac.T
+                try:
+                    null = t - jac.T @ np.linalg.solve(m, jac @ (a * t))
+                except np.linalg.LinAlgError:
+                    null = t
+                t = w * t + (1.0 - w) * null
+            torque += t
+        return torque, stiffness, clearance
+
+    def body_clearances(self, q_samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """At each configuration of ``q_samples`` (K, nq): the smallest distance [m] of every
+        hand point and volume sphere to the obstacles' real surfaces (K,), and to their
+        surfaces grown by the clearance to keep (K,) (< 0: not kept); inf without obstacles."""
+        surface = np.full(len(q_samples), np.inf)
+        kept = np.full(len(q_samples), np.inf)
+        if not self.obstacles:
+            return surface, kept
+        for j, q in enumerate(q_samples):
+            pts = [self.provider.positions(q, self.frames)]
+            radii = [np.zeros(len(self.frames))]
+            for vol in self.volumes.values():
+                pts.append(vol.positions(self.provider.kinematics(q, vol.frames)))
+                radii.append(vol.radii)
+            p, r = np.vstack(pts), np.concatenate(radii)
+            for ob in self.obstacles:
+                d = float(np.min(ob.surface_distance(p) - r))
+                surface[j] = min(surface[j], d)
+                kept[j] = min(kept[j], d - ob.inflation)
+        return surface, kept
 
     def _position_row(self, i: int) -> int:
         hand = self.hands[i]

@@ -29,6 +29,7 @@ import numpy as np
 
 from icub_pmp.errors import InvalidInput, UnknownName
 from icub_pmp.kinematics.robot_spec import HANDS, RobotSpec
+from icub_pmp.pmp.body_volume import BodyVolume
 from icub_pmp.pmp.branch_network import BranchNetwork
 from icub_pmp.pmp.force_field import ForceField
 from icub_pmp.pmp.idle_hand_hold import hold_idle_hand
@@ -80,6 +81,7 @@ class PmpPlanner:
         self._memories: dict[tuple, PostureMemory] = {}
         self._branch_cache: dict[tuple, BranchNetwork] = {}
         self._limit_cache: dict[tuple, JointLimitField] = {}
+        self._volume_cache: dict[str, BodyVolume | None] = {}
         c = self.config
         self._field = ForceField(np.zeros(3), np.array(c.stiffness), c.curl, c.curl_axis)
         self._relax = Relaxation(self._settings(self.config.max_steps))
@@ -125,9 +127,12 @@ class PmpPlanner:
         return q
 
     def build_network(
-        self, goal: ReachGoal, q_start: np.ndarray, posture: PostureField | None = None
+        self, goal: ReachGoal, q_start: np.ndarray, posture: PostureField | None = None,
+        body_volumes: bool = True,
     ) -> PmpNetwork:
-        """The PMP network of ``goal`` on the body model (validates the goal)."""
+        """The PMP network of ``goal`` on the body model (validates the goal); with
+        ``body_volumes`` the obstacle fields also act on the arms' volumes
+        (``obstacle_body_links``), else on the hand frames only."""
         c = self.config
         for h in goal.hands:
             if h not in HANDS:
@@ -171,10 +176,28 @@ class PmpPlanner:
             finals += list(goal.held_object.hand_targets().values())
         # obstacle fields do not reach the targets (the equilibrium stays on them)
         obstacles = [ob.clear_of(finals) for ob in goal.obstacles]
+        volumes = self._volumes(goal.hands) if obstacles and body_volumes else {}
         return PmpNetwork(
             self.provider, branches, {h: self.spec.hand_frame(h) for h in goal.hands}, q_start,
             targets, orientations, obstacles, limits, goal.held_object, posture,
+            volumes=volumes, volume_null_distance=c.obstacle_body_null_distance,
         )
+
+    def _volumes(self, hands) -> dict[str, BodyVolume]:
+        """hand -> the spheres covering its ``obstacle_body_links`` (built once); none when
+        the body model lacks those link frames (the hand frame alone is kept clear then)."""
+        links = tuple(lk for lk in self.config.obstacle_body_links if lk)
+        out = {}
+        for h in hands:
+            if h not in self._volume_cache:
+                vol = None
+                prefix = self.spec.arm_joints(h)[0][:2]
+                if links and all(prefix + lk in self.provider.frame_names() for lk in links):
+                    vol = BodyVolume.from_urdf(self.provider, h, links, self.spec)
+                self._volume_cache[h] = vol
+            if self._volume_cache[h] is not None:
+                out[h] = self._volume_cache[h]
+        return out
 
     def _branches(self, goal: ReachGoal) -> BranchNetwork:
         """The branching network of the goal's hands, trunk and admittance modulation."""
@@ -217,9 +240,32 @@ class PmpPlanner:
     ) -> ReachPlan:
         """Plan ``goal`` from ``q_start`` (see :meth:`start_configuration`)."""
         t0 = time.perf_counter()
-        c = self.config
         q0 = self.start_configuration(q_start)
         net = self.build_network(goal, q0)
+        trace, attempts, used_memory = self._relax_recalling(goal, q0, net, True)
+        body_net = None
+        if net.volumes and not self._reached(trace):
+            # decision 0063: the arms' volumes kept clear is best effort; when the plan with
+            # them does not reach, the hand frames alone keep the clearance (the contract of
+            # the request, and the planner's before the volumes) and the answer says how close
+            # the arm's volume comes
+            hand_net = self.build_network(goal, q0, body_volumes=False)
+            trace2, more, memory2 = self._relax_recalling(goal, q0, hand_net, False)
+            attempts += more
+            if self._reached(trace2):
+                body_net, net, trace, used_memory = net, hand_net, trace2, memory2
+        null_space = np.zeros(trace.steps, dtype=bool)
+        torque_field = None
+        if goal.target_forces or goal.torque_limits:
+            trace, null_space, torque_field = self._settle_torques(goal, net, trace)
+        return self._make_plan(goal, net, trace, null_space, torque_field, attempts,
+                               used_memory, t0, body_net)
+
+    def _relax_recalling(self, goal: ReachGoal, q0: np.ndarray, net: PmpNetwork,
+                         body_volumes: bool) -> tuple[RelaxationTrace, int, bool]:
+        """Relax ``net``; when it does not reach, again from recalled postures (the posture
+        memory): (the best trace, relaxations run, whether a recall gave it)."""
+        c = self.config
         relax = self._relax_obstacles if goal.obstacles else self._relax
         trace = relax.run(net)
         attempts, used_memory = 1, False
@@ -229,18 +275,14 @@ class PmpPlanner:
             )
             for recall in recalls:
                 field = PostureField(recall.q, c.posture_field_gain, c.posture_field_decay)
-                trace2 = relax.run(self.build_network(goal, q0, posture=field))
+                trace2 = relax.run(self.build_network(goal, q0, posture=field,
+                                                      body_volumes=body_volumes))
                 attempts += 1
                 if self._score(trace2) < self._score(trace):
                     trace, used_memory = trace2, True
                 if self._reached(trace):
                     break
-        null_space = np.zeros(trace.steps, dtype=bool)
-        torque_field = None
-        if goal.target_forces or goal.torque_limits:
-            trace, null_space, torque_field = self._settle_torques(goal, net, trace)
-        return self._make_plan(goal, net, trace, null_space, torque_field, attempts,
-                               used_memory, t0)
+        return trace, attempts, used_memory
 
     def _reached(self, trace: RelaxationTrace) -> bool:
         c = self.config
@@ -301,7 +343,8 @@ class PmpPlanner:
         net2 = PmpNetwork(
             self.provider, net.branches, dict(zip(net.hands, net.frames)), net.q_full(
                 trace.z[-1]), net.targets, net.orientations, net.obstacles, net.joint_limits,
-            net.held_object, None, field,
+            net.held_object, None, field, volumes=net.volumes,
+            volume_null_distance=net.volume_null_distance,
         )
         scale = trace.rate_scale
         net2.admittance = net2.admittance * scale  # same time scale as the reach
@@ -322,7 +365,10 @@ class PmpPlanner:
         return merged, null_space, field
 
     # ------------------------------------------------------------------ result
-    def _make_plan(self, goal, net, trace, null_space, torque_field, attempts, used_memory, t0):
+    def _make_plan(self, goal, net, trace, null_space, torque_field, attempts, used_memory, t0,
+                   body_net: PmpNetwork | None = None):
+        """The sampled plan of ``trace``; ``body_net``: the network with the arms' volumes
+        when ``net`` (hand frames only) replaced it (their clearance is then reported)."""
         c = self.config
         tau = goal.tau if goal.tau is not None else c.tau
         tbg = TimeBaseGenerator(tau)
@@ -353,9 +399,14 @@ class PmpPlanner:
         names = net.branches.joint_names
         idle = self._idle_arm_joints(goal, net, joints)
         if idle:  # decision 0056: the idle hands stay where they were
+            dt = float(np.min(np.diff(times))) if len(times) > 1 else c.sample_period
             for frame, arm in idle:
-                q_full[:, arm] = hold_idle_hand(self.provider, frame, arm, q_full,
-                                                c.idle_hand_margin)
+                # at most half the joints' velocity and acceleration limits
+                vmax = np.array([self.spec.velocity_limit(self._names[i]) for i in arm])
+                amax = np.array([self.spec.acceleration_limit(self._names[i]) for i in arm])
+                q_full[:, arm] = hold_idle_hand(
+                    self.provider, frame, arm, q_full, c.idle_hand_margin,
+                    max_step=0.5 * vmax * dt, max_step_change=0.5 * amax * dt * dt)
             extra = [i for _, arm in idle for i in arm]
             names = names + tuple(self._names[i] for i in extra)
             joints = np.hstack([joints, q_full[:, extra]])
@@ -382,15 +433,21 @@ class PmpPlanner:
         hand_paths = functools.lru_cache(maxsize=1)(
             lambda: self._hand_paths(net.hands, net.frames, q_full))
         clearance, kept = None, True
-        if net.obstacles:  # judged on the sampled plan, not only the relaxation's nodes
-            pts = np.concatenate(list(hand_paths().values()))
-            clearance = min(float(np.min(ob.surface_distance(pts))) for ob in net.obstacles)
-            kept = min(float(np.min(ob.clearance(pts))) for ob in net.obstacles) >= 0.0
+        if net.obstacles:  # judged on the sampled plan, not only the relaxation's nodes, on
+            # the hands and their body volumes; a body that starts within the clearance must
+            # not come closer than it started
+            surface, grown = net.body_clearances(q_full)
+            clearance = float(surface.min())
+            kept = float(grown.min()) >= min(0.0, float(grown[0]))
             ok = ok and kept
         message = self._message(net.hands, residuals, rot_res, ok, torque_ratio, used_memory,
                                 not kept, bool(net.obstacles))
         if clearance is not None:
             message += f"; obstacle clearance {clearance * 1e3:.1f} mm"
+        if body_net is not None and clearance is not None:
+            body = float(body_net.body_clearances(q_full)[0].min())
+            message += (f" (hand frames only: with the arm's volume kept clear the plan did not "
+                        f"reach; the arm's volume comes within {body * 1e3:.1f} mm)")
         plan = ReachPlan(
             hands=net.hands,
             joint_names=names,
@@ -413,6 +470,7 @@ class PmpPlanner:
             obstacle_clearance=clearance,
             final_torques=final_torques,
             torque_limits=torque_limits,
+            hand_frames_only=body_net is not None,
         )
         return plan
 

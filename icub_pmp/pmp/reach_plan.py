@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Callable, Mapping
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -44,6 +44,8 @@ class ReachPlan:
             + gravity) over the network's joints (the first n of ``joint_names``; None
             without target forces or torque limits).
         torque_limits: (n,) the limits [N m] they were held to (None likewise).
+        hand_frames_only: with obstacles, no plan keeping the arms' volumes clear reached, and
+            this one keeps the hand frames clear only (decision 0063).
         attempts: relaxations run (1 + those guided by remembered postures).
         used_memory: whether the posture-memory relaxation gave the returned plan.
     """
@@ -68,6 +70,7 @@ class ReachPlan:
     obstacle_clearance: float | None = None
     final_torques: np.ndarray | None = None
     torque_limits: np.ndarray | None = None
+    hand_frames_only: bool = False
     path_function: Callable[[], Mapping[str, np.ndarray]] | None = dataclasses.field(
         default=None, repr=False, compare=False
     )
@@ -91,6 +94,15 @@ class ReachPlan:
     def max_residual(self) -> float:
         """Largest hand residual at tau [m]."""
         return max(self.residuals.values(), default=0.0)
+
+    def configurations(self, joint_names: Sequence[str]) -> np.ndarray:
+        """Full configurations (N, nq) [rad] at the samples, in the order of ``joint_names``
+        (the body model's, that of :attr:`q_start`); joints the plan does not move stay at
+        ``q_start``."""
+        names = list(joint_names)
+        q = np.repeat(np.asarray(self.q_start, dtype=float)[None], len(self.t), axis=0)
+        q[:, [names.index(j) for j in self.joint_names]] = self.positions
+        return q
 
     def hand_speed(self, hand: str) -> np.ndarray:
         """(N,) hand speed [m/s] along the predicted path (finite differences)."""

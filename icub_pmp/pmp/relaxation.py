@@ -220,7 +220,9 @@ class Relaxation:
                 new_state = network.evaluate(z_new, s + h)
                 if not network.obstacles:
                     break
-                if new_state.clearance > 0.0 and not (adaptive and _jump(
+                # a body that starts within the clearance may move out of it
+                clear = new_state.clearance > 0.0 or new_state.clearance >= state.clearance
+                if clear and not (adaptive and _jump(
                         state, new_state) > 2.0 * cfg.max_displacement):
                     break
                 h *= 0.5

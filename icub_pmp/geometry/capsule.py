@@ -7,7 +7,7 @@ hit each other, which the paper's two separate robots could not).
 points' principal axis through their centroid, the radius is the largest distance of a point
 from that axis, and the end points are pulled in as far as every point stays inside.
 :func:`fit_capsules` covers a link's collision mesh with one to ``max_pieces`` such
-capsules: the points of the mesh's convex hull (:class:`~icub_pmp.peripersonal.LinkHull`;
+capsules: the points of the mesh's convex hull (:class:`~icub_pmp.geometry.LinkHull`;
 the physics collides the hull) are cut into equal slabs across the second principal axis,
 one capsule per slab, and the number of slabs with the smallest total capsule volume wins
 (one capsule for a long link such as the forearm, a few for a flat one such as the palm).
