@@ -423,6 +423,12 @@ def _one_line(run: dict) -> str:
             f"{run['grasp_retries']}, re-aimed {run['reaims']}")
 
 
+def _save_partial(out: Path, report: dict, runs: list[dict]) -> None:
+    """The runs done so far in ``out``/partial.json (a long run stopped early keeps them)."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "partial.json").write_text(json.dumps({**report, "runs": runs}, indent=1))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line (module doc)."""
     from icub_pmp.demo.demo_runner import DemoRunner
@@ -476,6 +482,7 @@ def main(argv: list[str] | None = None) -> int:
                     runs.append(execute_over_dds(runner, scene, plan, frozen=WRISTS,
                                                  verbose=args.verbose))
                     print(f"tabletop_dds: run {k + 1}: {_one_line(runs[-1])}", flush=True)
+                    _save_partial(out, report, runs)
                     if k == 0 and args.serial:
                         report["serial"] = execute_over_dds(
                             runner, scene, plan, frozen=WRISTS, all_serial=True,
@@ -484,6 +491,7 @@ def main(argv: list[str] | None = None) -> int:
                                                             / runs[0]["duration"])
                         print(f"tabletop_dds: all-serial: {_one_line(report['serial'])}; "
                               f"speed-up {report['task_speedup_vs_serial']:.2f}", flush=True)
+                        _save_partial(out, report, runs)
                 report["scheduled"] = runs[0]
                 report["runs"] = runs
                 report["task_success"] = all(r["success"] for r in runs)
