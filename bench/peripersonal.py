@@ -3,6 +3,7 @@
     scripts/env.sh python bench/peripersonal.py --quick     # 30 reach pairs, < 2 min
     scripts/env.sh python bench/peripersonal.py             # 120 reach pairs
     scripts/env.sh python bench/peripersonal.py --tune      # the tuning pairs (seed 1)
+    scripts/env.sh python bench/peripersonal.py --quick --dds --dds-runs 2  # + over DDS
 
 Maps: per arm, analytic motor babbling (``--babbles`` postures uniform within the arm's joint
 limits, trunk and other arm at rest, hand = forward kinematics of the URDF through pinocchio)
@@ -37,9 +38,13 @@ all-serial run's simulated time over the scheduled run's), ``task_arm_arm_contac
 
 ``--dds`` also runs the task over DDS (:mod:`icub_pmp.demo.tabletop_dds`: the node graph in
 lockstep, the pair check through ``/peripersonal/plan_pair``, ``/pmp/reach_action``,
-``/sim/grasp``, judged on the ground-truth topics), as scheduled and all-serial, on the same
-maps: the same figures prefixed ``task_dds_`` (10-30 min on a loaded 2-core machine: not part
-of ``--quick``, not in ``bench/registry.yaml``).
+``/sim/grasp``, judged on the ground-truth topics), as scheduled and all-serial in the same
+graph, the same cubes and retries, on the same maps: the same figures prefixed ``task_dds_``
+(``task_dds_speedup_vs_serial``: the all-serial run's simulated time over the scheduled
+run's, both over DDS). ``--dds-runs N``: N scheduled runs in that graph
+(``task_dds_runs_delivered``; ``task_dds_success`` needs every one). The graph's realism preset
+is pinned (``--realism``, default ``ideal``). 15-60 min on a loaded 2-core machine: not part of
+``--quick``, not in ``bench/registry.yaml``.
 
 Ends with one JSON line. Timings depend on the machine's load (the load average is printed).
 """
@@ -116,6 +121,29 @@ def load_or_train(directory: Path, n_babbles: int, retrain: bool) -> tuple[dict,
     return maps, info
 
 
+def _task_figures(rep: dict, prefix: str, wall0: float) -> dict:
+    """A tabletop report's figures (module doc; ``rep`` has ``scheduled``, ``serial``,
+    ``task_success`` and ``task_speedup_vs_serial``), keys prefixed ``prefix``, with the
+    run's rounds and its wall time since ``wall0``."""
+    s, b = rep["scheduled"], rep["serial"]
+    rounds = s.get("rounds") or [r["mode"] for r in rep["plan"]]
+    return {f"{prefix}{k}": v for k, v in {
+        "success": bool(rep["task_success"]),
+        "speedup_vs_serial": round(rep["task_speedup_vs_serial"], 3),
+        "delivered": len(s["delivered"]),
+        "objects": s["objects"],
+        "time_s": round(s["duration"], 2),
+        "serial_time_s": round(b["duration"], 2),
+        "arm_arm_contacts": s["arm_arm_contacts"],
+        "arm_object_collisions": len(s["arm_object_collisions"]),
+        "serial_success": bool(b["success"]),
+        "serial_arm_arm_contacts": b["arm_arm_contacts"],
+        "handovers": s["handovers"],
+        "rounds": rounds,
+        "wall_s": round(time.perf_counter() - wall0, 1),
+    }.items()}
+
+
 def tabletop_figures(space: PeripersonalSpace) -> dict:
     """The tabletop task's figures (module doc), from one scheduled and one all-serial run."""
     t0 = time.perf_counter()
@@ -127,33 +155,25 @@ def tabletop_figures(space: PeripersonalSpace) -> dict:
           f"(simulated); arm-arm contacts {s['arm_arm_contacts']} / {b['arm_arm_contacts']}, "
           f"arm-object {s['arm_object_collisions']} / {b['arm_object_collisions']}; hand-overs "
           f"{s['handovers']}; grasp refusals {s['grasp_refusals']}", file=sys.stderr)
-    return {
-        "task_success": bool(rep["task_success"]),
-        "task_speedup_vs_serial": round(rep["task_speedup_vs_serial"], 3),
-        "task_delivered": len(s["delivered"]),
-        "task_objects": s["objects"],
-        "task_time_s": round(s["duration"], 2),
-        "task_serial_time_s": round(b["duration"], 2),
-        "task_arm_arm_contacts": s["arm_arm_contacts"],
-        "task_arm_object_collisions": len(s["arm_object_collisions"]),
-        "task_serial_success": bool(b["success"]),
-        "task_handovers": s["handovers"],
-        "task_rounds": [r["mode"] for r in rep["plan"]],
-        "task_wall_s": round(time.perf_counter() - t0, 1),
-    }
+    return _task_figures(rep, "task_", t0)
 
 
-def tabletop_dds_figures(maps: Path) -> dict:
+def tabletop_dds_figures(maps: Path, runs: int = 1, realism: str = "ideal") -> dict:
     """The tabletop task over DDS (module doc): ``python -m icub_pmp.demo.tabletop_dds
-    --serial`` on ``maps``, its report's figures prefixed ``task_dds_``."""
+    --serial --runs runs`` on ``maps`` in one graph (the scheduled run, the all-serial
+    baseline, then the further scheduled runs), its report's figures prefixed ``task_dds_``;
+    ``task_dds_runs_delivered``: the cubes each scheduled run delivered."""
     import subprocess
 
     t0 = time.perf_counter()
     out = OUT / "tabletop_dds"
+    (out / "report.json").unlink(missing_ok=True)  # never a previous run's figures
     p = subprocess.run([sys.executable, "-m", "icub_pmp.demo.tabletop_dds", "--serial",
-                        "--maps", str(maps), "--out", str(out)], capture_output=True, text=True)
+                        "--runs", str(runs), "--realism", realism, "--maps", str(maps),
+                        "--out", str(out)], capture_output=True, text=True)
+    print(p.stdout[-4000:], file=sys.stderr)
     if not (out / "report.json").exists() or p.returncode not in (0, 1):
-        print(p.stdout[-3000:] + p.stderr[-3000:], file=sys.stderr)
+        print(p.stderr[-3000:], file=sys.stderr)
         return {"task_dds_success": False, "task_dds_error": f"exit {p.returncode}"}
     rep = json.loads((out / "report.json").read_text())
     s, b = rep["scheduled"], rep["serial"]
@@ -161,20 +181,10 @@ def tabletop_dds_figures(maps: Path) -> dict:
           f"{s['duration']:.2f} s scheduled vs {b['duration']:.2f} s all-serial (simulated); "
           f"rounds {s['rounds']}, replans {s['replans']}, grasp retries {s['grasp_retries']}",
           file=sys.stderr)
-    return {
-        "task_dds_success": bool(rep["task_success"]),
-        "task_dds_speedup_vs_serial": round(rep["task_speedup_vs_serial"], 3),
-        "task_dds_delivered": len(s["delivered"]),
-        "task_dds_objects": s["objects"],
-        "task_dds_time_s": round(s["duration"], 2),
-        "task_dds_serial_time_s": round(b["duration"], 2),
-        "task_dds_arm_arm_contacts": s["arm_arm_contacts"],
-        "task_dds_arm_object_collisions": len(s["arm_object_collisions"]),
-        "task_dds_serial_success": bool(b["success"]),
-        "task_dds_handovers": s["handovers"],
-        "task_dds_rounds": s["rounds"],
-        "task_dds_wall_s": round(time.perf_counter() - t0, 1),
-    }
+    return {**_task_figures(rep, "task_dds_", t0),
+            "task_dds_runs_delivered": [len(r["delivered"]) for r in rep["runs"]],
+            "task_dds_runs_time_s": [round(r["duration"], 2) for r in rep["runs"]],
+            "task_dds_realism": realism}
 
 
 def main() -> None:
@@ -189,9 +199,15 @@ def main() -> None:
     ap.add_argument("--no-task", action="store_true", help="skip the tabletop task")
     ap.add_argument("--dds", action="store_true",
                     help="also the tabletop task over DDS (task_dds_* keys; 10-30 min)")
+    ap.add_argument("--dds-runs", type=int, default=1,
+                    help="scheduled runs of the task over DDS in its graph (with --dds)")
+    ap.add_argument("--realism", choices=("ideal", "icub"), default="ideal",
+                    help="the simulator's realism preset of the task over DDS (with --dds)")
     ap.add_argument("--estimator", action="store_true",
                     help="close the controller's torque loop on the wrench estimator too")
     args = ap.parse_args()
+    if args.dds_runs < 1:
+        ap.error(f"--dds-runs: expected >= 1, got {args.dds_runs}")
     if args.tune:
         args.seed = 1
     n_pairs = args.pairs or (30 if args.quick else 120)
@@ -291,7 +307,7 @@ def main() -> None:
         result["wall_s"] = round(time.perf_counter() - wall0, 1)
         result["load_avg"][1] = round(os.getloadavg()[0], 2)
     if args.dds:
-        result.update(tabletop_dds_figures(args.maps))
+        result.update(tabletop_dds_figures(args.maps, args.dds_runs, args.realism))
         result["wall_s"] = round(time.perf_counter() - wall0, 1)
         result["load_avg"][1] = round(os.getloadavg()[0], 2)
     print(f"paper: 478 / 476 neurons (TX / RX) from about {PAPER_BABBLES} babbles; ours "

@@ -846,13 +846,19 @@ def tabletop_phase(runner: DemoRunner, name: str = "tabletop") -> PhaseResult:
     check through ``/peripersonal/plan_pair``, one hand-over through an empty area, the grasp
     emulated by ``/sim/grasp``. For the phase the controller goes to its shipped impedance
     mode (in the demo's position mode the palm presses a cube into the table) and the
-    planner's success tolerance to 1 cm (frozen wrists); both are put back after. Judged in
+    planner to the task's :data:`PLANNER_PARAMETERS` (1 cm success tolerance with frozen
+    wrists, joint motion counted as progress); both are put back after. Judged in
     the physics: every cube delivered (within 5 cm of its place, on the table), 0 arm-arm
     contacts and 0 collisions of an arm with a cube it is not working on."""
     from std_srvs.srv import Trigger
 
     from icub_pmp.demo.tabletop import SCENE, WRISTS, _space
-    from icub_pmp.demo.tabletop_dds import ServicePairCheck, execute_over_dds, set_parameters
+    from icub_pmp.demo.tabletop_dds import (
+        PLANNER_PARAMETERS,
+        ServicePairCheck,
+        execute_over_dds,
+        set_parameters,
+    )
     from icub_pmp.peripersonal.tabletop_task import TabletopPlanner
 
     t0 = runner.sim_time()
@@ -863,7 +869,7 @@ def tabletop_phase(runner: DemoRunner, name: str = "tabletop") -> PhaseResult:
     old = [("/impedance_controller", set_parameters(runner.probe, "/impedance_controller",
                                                      {"mode": "impedance"})),
            ("/pmp_planner", set_parameters(runner.probe, "/pmp_planner",
-                                           {"success_tolerance": 0.01}))]
+                                           PLANNER_PARAMETERS))]
     try:
         plan = TabletopPlanner(space, ServicePairCheck(runner.probe)).plan(SCENE)
         report = execute_over_dds(runner, SCENE, plan, frozen=WRISTS)

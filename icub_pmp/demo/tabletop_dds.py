@@ -49,12 +49,18 @@ from icub_pmp.peripersonal.tabletop_task import (
     TaskPlan,
 )
 
-__all__ = ["ServicePairCheck", "execute_over_dds", "graph_parameters", "set_parameters",
-           "main"]
+__all__ = ["PLANNER_PARAMETERS", "ServicePairCheck", "execute_over_dds", "graph_parameters",
+           "set_parameters", "main"]
 
 GRAPH = ["sim_bridge", "impedance_controller", "pmp_planner", "peripersonal_space"]
 #: a refused grasp is tried again with the hand aimed this much lower onto the cube [m]
 GRASP_RETRY_LOWER = 0.01
+#: the planner's parameters for the task: a pick-and-place needs the hand within a
+#: centimetre (wrists frozen, PMP ends a few mm short of some targets, which the planner would
+#: refuse at its 1 mm default); joint motion the hands barely show counted as progress
+#: (``progress_joint_floor``, decision 0061: a carry to the edge of the workspace otherwise
+#: spins ``shoulder_yaw`` in its last instants and the rate limits stretch it 5-7 fold)
+PLANNER_PARAMETERS = {"success_tolerance": 0.01, "progress_joint_floor": 0.5}
 
 
 class ServicePairCheck:
@@ -383,24 +389,29 @@ def execute_over_dds(runner: object, scene: TabletopScene, plan: TaskPlan,
             "wall_time": time.perf_counter() - wall0, "success": success}
 
 
-def graph_parameters(scene: TabletopScene, maps_dir: Path) -> dict[str, dict[str, object]]:
+def graph_parameters(scene: TabletopScene, maps_dir: Path, realism: str = "ideal"
+                     ) -> dict[str, dict[str, object]]:
     """The task graph's node parameters (over their config files): the simulator in lockstep
     with ``scene``'s cubes and no cameras, the others on simulated time, ``peripersonal_space``
-    on the maps in ``maps_dir``."""
+    on the maps in ``maps_dir``; the simulator's realism preset pinned to ``realism`` (with the
+    controller's friction compensation that goes with it: the task's figures were measured on
+    ``ideal``, whatever preset the config files ship). ValueError for an unknown preset."""
+    from icub_pmp.graph import with_realism
+
     spec = " ".join(f"{n}:{p[0]},{p[1]},{p[2]}" for n, p in scene.objects.items())
-    return {
+    return with_realism(realism, nodes=GRAPH, params={
         "sim_bridge": {"mode": "lockstep", "use_sim_time": False, "cameras_enabled": False,
                        "tabletop_objects": spec},
         # the controller as the in-process harness runs it (the shipped impedance mode: the
         # palm stops on the cube instead of pressing it into the table)
         "impedance_controller": {"lockstep": True, "use_sim_time": True,
                                  "wait_for_estimate": False},
-        # a pick-and-place needs the hand within a centimetre (wrists frozen, PMP ends a few
-        # mm short of some targets, which the planner would refuse at its 1 mm default)
-        "pmp_planner": {"use_sim_time": True, "success_tolerance": 0.01},
+        # the carries end at the edge of the workspace: joint motion counted as progress
+        # (decision 0061) keeps shoulder_yaw from spinning at the end of the reach
+        "pmp_planner": {"use_sim_time": True, **PLANNER_PARAMETERS},
         "peripersonal_space": {"use_sim_time": True, "maps_dir": str(maps_dir),
                                "grow_if_missing": False},
-    }
+    })
 
 
 def _one_line(run: dict) -> str:
@@ -412,11 +423,18 @@ def _one_line(run: dict) -> str:
             f"{run['grasp_retries']}, re-aimed {run['reaims']}")
 
 
+def _save_partial(out: Path, report: dict, runs: list[dict]) -> None:
+    """The runs done so far in ``out``/partial.json (a long run stopped early keeps them)."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "partial.json").write_text(json.dumps({**report, "runs": runs}, indent=1))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line (module doc)."""
     from icub_pmp.demo.demo_runner import DemoRunner
     from icub_pmp.demo.tabletop import SCENE, WRISTS, _markdown, _space, plan_summary
     from icub_pmp.graph import NodeGraph, reserve_domain_id, ros_environment
+    from icub_pmp.graph.realism_parameters import PRESETS
     from icub_pmp.ros.probe import RosProbe
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -426,6 +444,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--runs", type=int, default=1,
                     help="scheduled runs in the same graph (each from a reset) [-]")
     ap.add_argument("--verbose", action="store_true", help="print every goal as it ends")
+    ap.add_argument("--realism", choices=PRESETS, default="ideal",
+                    help="the simulator's realism preset (default ideal, where the task's "
+                         "figures were measured, whatever config/sim_bridge.yaml ships)")
     ap.add_argument("--cubes", default="",
                     help="comma-separated cubes of the scene to use (default all: "
                          f"{','.join(SCENE.objects)})")
@@ -447,19 +468,21 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or Path("bags") / time.strftime("tabletop-dds-%Y%m%d-%H%M%S")
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
-        with NodeGraph(GRAPH, graph_parameters(scene, maps_dir), env=env) as graph:
+        with NodeGraph(GRAPH, graph_parameters(scene, maps_dir, args.realism),
+                       env=env) as graph:
             probe = RosProbe(domain, "tabletop_driver")
             try:
                 runner = DemoRunner(probe)
                 runner.wait_ready(services=("/sim/set_object_pose",))
                 plan = TabletopPlanner(space, ServicePairCheck(probe)).plan(scene)
-                report = {"plan": plan_summary(plan), "over": "dds",
+                report = {"plan": plan_summary(plan), "over": "dds", "realism": args.realism,
                           "load_average": list(os.getloadavg())}
                 runs = []
                 for k in range(args.runs):  # the all-serial baseline after the first run
                     runs.append(execute_over_dds(runner, scene, plan, frozen=WRISTS,
                                                  verbose=args.verbose))
                     print(f"tabletop_dds: run {k + 1}: {_one_line(runs[-1])}", flush=True)
+                    _save_partial(out, report, runs)
                     if k == 0 and args.serial:
                         report["serial"] = execute_over_dds(
                             runner, scene, plan, frozen=WRISTS, all_serial=True,
@@ -468,6 +491,7 @@ def main(argv: list[str] | None = None) -> int:
                                                             / runs[0]["duration"])
                         print(f"tabletop_dds: all-serial: {_one_line(report['serial'])}; "
                               f"speed-up {report['task_speedup_vs_serial']:.2f}", flush=True)
+                        _save_partial(out, report, runs)
                 report["scheduled"] = runs[0]
                 report["runs"] = runs
                 report["task_success"] = all(r["success"] for r in runs)

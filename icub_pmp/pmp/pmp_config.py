@@ -32,6 +32,7 @@ class PmpConfig(ConfigBase):
     sample_period: float = 0.02  # time between trajectory points [s]
     time_parametrisation: str = "progress"  # "progress" (gamma of eq A5 normalised to 1) | "gamma"
     rotation_length_scale: float = 0.1  # [m/rad] orientation motion in the progress measure
+    progress_joint_floor: float = 0.0  # >0: joint motion counted as progress (extension, 0061)
     # extrinsic fields (eq 1)
     stiffness: tuple[float, ...] = (1000.0, 1000.0, 1000.0)  # K_ext diagonal, root_link x y z [N/m]
     rotation_stiffness: float = 10.0  # orientation field [N m/rad]
@@ -97,7 +98,7 @@ class PmpConfig(ConfigBase):
                 raise ConfigError(f"PmpConfig.{name}: expected a finite value > 0, got {v}")
         nonneg = ("curl", "joint_limit_alpha", "posture_field_gain", "start_tolerance",
                   "max_displacement", "synchronise_hands", "obstacle_step", "idle_hand_margin",
-                  "obstacle_body_null_distance")
+                  "obstacle_body_null_distance", "progress_joint_floor")
         for name in nonneg:
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:

@@ -372,7 +372,8 @@ class PmpPlanner:
         c = self.config
         tau = goal.tau if goal.tau is not None else c.tau
         tbg = TimeBaseGenerator(tau)
-        timing = TbgTiming(tbg, c.time_parametrisation, c.rotation_length_scale)
+        timing = TbgTiming(tbg, c.time_parametrisation, c.rotation_length_scale,
+                           c.progress_joint_floor)
         z_nodes, s_nodes = trace.z, trace.s
         pos_nodes, rot_nodes = trace.hand_positions, trace.hand_rotations
         if len(s_nodes) < 2:  # already at the target: a still trajectory

@@ -22,6 +22,14 @@ Null-space motion with no extrinsic motion (the settling of Sect. 2.3) is timed 
 joint-space length scaled by the reach's own hand-length per joint-length ratio, so it gets
 time in proportion to how much the joints move.
 
+``joint_floor`` > 0 (an extension, decision 0061): every segment counts at least that fraction
+of its joint-space length (scaled by the same hand-per-joint ratio of the whole path) as
+extrinsic length. Near the edge of the workspace the relaxation's last nodes turn a joint
+(``shoulder_yaw``) a long way while the hand moves a millimetre; by hand progress alone they
+get almost no time, the joint would spin at several rad/s and the joint rate limits stretch
+the whole reach several-fold. The floor gives those segments time; segments where the hand
+moves in proportion to the joints keep their minimum-jerk timing (0 = off, the paper's).
+
 Both map ``t = tau`` to the equilibrium (the last node), never evaluating the divergent Gamma.
 """
 
@@ -51,12 +59,15 @@ class TbgTiming:
     """Maps relaxation nodes onto sample times of a TBG of duration ``tbg.tau``."""
 
     def __init__(self, tbg: TimeBaseGenerator, mode: str = "progress",
-                 rotation_length_scale: float = 0.1):
+                 rotation_length_scale: float = 0.1, joint_floor: float = 0.0):
         if mode not in ("progress", "gamma"):
             raise InvalidInput(f"time parametrisation {mode!r}; valid: ['gamma', 'progress']")
+        if not np.isfinite(joint_floor) or joint_floor < 0:
+            raise InvalidInput(f"joint_floor: expected a finite value >= 0, got {joint_floor}")
         self.tbg = tbg
         self.mode = mode
         self.rotation_length_scale = float(rotation_length_scale)
+        self.joint_floor = float(joint_floor)
 
     def progress(
         self,
@@ -91,6 +102,11 @@ class TbgTiming:
             if total <= 1e-12:
                 return np.linspace(0.0, 1.0, n_nodes)  # nothing moves at all
             return np.concatenate([[0.0], np.cumsum(dq) / total])
+        if self.joint_floor > 0 and dq.sum() > 0:  # joint motion the hands barely show
+            ratio = totals[moving] / dq.sum()
+            d = d[:, moving]
+            d = np.maximum(d, self.joint_floor * ratio[None, :] * dq[:, None])
+            totals, moving = d.sum(axis=0), np.ones(d.shape[1], dtype=bool)
         # mean over the moving hands of each hand's own travelled fraction
         frac = np.cumsum(d[:, moving], axis=0) / totals[moving]
         p = np.concatenate([[0.0], frac.mean(axis=1)])
