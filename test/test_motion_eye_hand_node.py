@@ -51,10 +51,12 @@ def map_file(tmp_path_factory):
 def test_target_from_the_eye_hand_map(ros_domain_id, ros_probe, frames, map_file):  # noqa: F811
     """With the learned map as the target source, /motion/target stays within 1.5 cm of the
     cylinder's centre (median over the frames; triangulation gets within 1 cm in
-    test_motion_node), and the node says which source it uses."""
+    test_motion_node), and the node says which source it uses. The frames and the map are
+    the nominal cameras', not the shipped icub robot's calibrated ones."""
     node = NodeProcess("motion_segmenter", params_file=PARAMS,
                        parameters={"target_source": "eye_hand_map",
-                                   "eye_hand_map_file": str(map_file)})
+                                   "eye_hand_map_file": str(map_file),
+                                   "eye_calibration_file": ""})
     try:
         assert node.wait_for_output("3-D target from the eye-hand map", 90.0), node.output()
         targets: list[PointStamped] = []

@@ -182,17 +182,18 @@ def body_model(out_dir: Path, model: str = "", dataset: str = "", babbles: int =
                   f"iterations): validation RMSE {report.validation_rmse * 1e3:.2f} mm"), offset
 
 
-def _graph(vision: bool) -> tuple[list[str], dict[str, dict[str, object]]]:
+def _graph(vision: bool, realism: str | None = None
+           ) -> tuple[list[str], dict[str, dict[str, object]]]:
     """The nodes and their parameters (``make demo``'s, ``scenario.graph_parameters``): the
     simulator in lockstep with the stiff position-mode controller (no wrench estimator to wait
     for); with ``vision`` the cameras, the motion segmenter and the gaze controller, else the
-    cameras off."""
+    cameras off. ``realism``: the simulator's preset (None: the shipped config's)."""
     from icub_pmp.demo.scenario import graph_parameters
 
     nodes = ["sim_bridge", "impedance_controller"]
     if vision:
         nodes += ["motion_segmenter", "gaze_controller"]
-    params = {n: dict(p) for n, p in graph_parameters().items() if n in nodes}
+    params = {n: dict(p) for n, p in graph_parameters(realism).items() if n in nodes}
     params["impedance_controller"]["wait_for_estimate"] = False
     if not vision:
         params["sim_bridge"]["cameras_enabled"] = False
@@ -372,8 +373,8 @@ def reach_seen(drv: _Driver, runner: DemoRunner, planner: str, index: int, seen:
 
 def run_reaches(model_path: Path, targets: np.ndarray, tau: float = 2.0,
                 offset: np.ndarray | None = None, log=print,  # noqa: ANN001 - print-like
-                objects: tuple[ObjectMotion, ...] = (), see_timeout: float = 10.0
-                ) -> tuple[list[ReachRecord], list[VisionRecord]]:
+                objects: tuple[ObjectMotion, ...] = (), see_timeout: float = 10.0,
+                realism: str | None = None) -> tuple[list[ReachRecord], list[VisionRecord]]:
     """Start the graph in a private ROS domain, reach ``targets`` and the cylinder seen after
     each of ``objects`` with each planner (module doc), stop everything; the records of every
     reach, learned first. ``offset`` [m]: the point of the hand frame the learned model stands
@@ -386,7 +387,7 @@ def run_reaches(model_path: Path, targets: np.ndarray, tau: float = 2.0,
     records: list[ReachRecord] = []
     vision: list[VisionRecord] = []
     seen: list[Seen] = []
-    nodes, parameters = _graph(bool(objects))
+    nodes, parameters = _graph(bool(objects), realism)
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
         log(f"learned_reach: ROS_DOMAIN_ID={domain}; starting {', '.join(nodes)}")
@@ -507,6 +508,8 @@ def _arguments(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--see-timeout", type=float, default=10.0,
                     help="simulated time to wait for a still stereo target [s]")
     ap.add_argument("--tau", type=float, default=2.0, help="reach duration [s]")
+    ap.add_argument("--realism", choices=("ideal", "icub"), default=None,
+                    help="the simulator's realism preset (default: config/sim_bridge.yaml's)")
     ap.add_argument("--out", default="", help="output folder (default bags/learned-<time>)")
     return ap.parse_args(argv)
 
@@ -572,7 +575,7 @@ def main(argv: list[str] | None = None) -> int:
         records, vision = run_reaches(path, targets, args.tau, offset,
                                       log=lambda s: print(s, flush=True),
                                       objects=OBJECTS[:args.objects],
-                                      see_timeout=args.see_timeout)
+                                      see_timeout=args.see_timeout, realism=args.realism)
     except (TimeoutError, RuntimeError) as exc:
         print(f"learned_reach: error: {exc}", file=sys.stderr)
         return 1

@@ -62,11 +62,12 @@ def host_environment(domain_id: int, peers: list[str], udp_only: bool) -> dict[s
     return env
 
 
-def _parameters() -> dict[str, dict[str, object]]:
-    """The demo's node parameters (lockstep, simulated time)."""
+def _parameters(realism: str | None = None) -> dict[str, dict[str, object]]:
+    """The demo's node parameters (lockstep, simulated time) on the simulator's ``realism``
+    preset (None: the shipped config's)."""
     from icub_pmp.demo.scenario import graph_parameters
 
-    return graph_parameters()
+    return graph_parameters(realism)
 
 
 def time_service_calls(service: str, calls: int, timeout: float = 60.0) -> list[float]:
@@ -151,9 +152,10 @@ def _python(prefix: list[str], *args: str) -> list[str]:
 
 
 def run_two_hosts(single_host: bool = False, delay_ms: float = 0.0, calls: int = 50,
-                  timeout: float = 600.0) -> dict[str, object]:
-    """Start the split graph (or the whole graph on one host), run the driver, return the
-    figures. Raises VethLinkError when namespaces cannot be made here."""
+                  timeout: float = 600.0, realism: str | None = None) -> dict[str, object]:
+    """Start the split graph (or the whole graph on one host) on the ``realism`` preset
+    (None: the shipped one), run the driver, return the figures. Raises VethLinkError when
+    namespaces cannot be made here."""
     with reserve_domain_id() as domain, VethLink(delay_ms=delay_ms) as link:
         # the robot's PC keeps shared memory inside itself (its 1 kHz loop); the laptop
         # announces UDP locators only, so everything between the two goes over the link even
@@ -163,7 +165,7 @@ def run_two_hosts(single_host: bool = False, delay_ms: float = 0.0, calls: int =
         laptop: Host = link.robot if single_host else link.laptop
         if single_host:
             laptop_env = robot_env
-        params = _parameters()
+        params = _parameters(realism)
         packets0 = link.tx_packets(link.laptop)
         with NodeGraph(ROBOT_NODES, params, env=robot_env, prefix=link.prefix(link.robot)) \
                 as robot_graph, \
