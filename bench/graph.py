@@ -39,6 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import numpy as np  # noqa: E402
 
 from icub_pmp.kinematics import IcubModel  # noqa: E402
+from icub_pmp.ros.reach_goal_message import reach_goal_message  # noqa: E402
 from icub_pmp.testing import (  # noqa: E402
     NodeProcess,
     RosProbe,
@@ -145,12 +146,7 @@ def run_mode(mode: str, goals: int, seed: int, model: IcubModel) -> dict:
             clock0 = len(watch.clock)
             errs, ok, lat, start = [], 0, [], []
             for hand, target in _targets(model, goals, seed):
-                g = Reach.Goal()
-                g.hands = [hand]
-                g.tau = 1.5
-                t = g.left_target if hand == "left" else g.right_target
-                t.header.frame_id = "root_link"
-                t.pose.position.x, t.pose.position.y, t.pose.position.z = map(float, target)
+                g = reach_goal_message({hand: target}, 1.5)
                 watch.watch(hand)
                 fb: list = []
                 executing: list[float] = []

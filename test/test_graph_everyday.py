@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from icub_pmp.kinematics import IcubModel
+from icub_pmp.ros.reach_goal_message import reach_goal_message
 from icub_pmp.testing import NodeProcess, repo_root
 
 pytestmark = pytest.mark.integration
@@ -77,17 +78,7 @@ def _alive(pid: int) -> bool:
 
 
 def _goal(targets: dict[str, list[float]], tau: float = 2.0, torso: bool = False):
-    from icub_interfaces.action import Reach
-
-    g = Reach.Goal()
-    g.hands = list(targets)
-    g.tau = tau
-    g.use_torso = torso
-    for h, p in targets.items():
-        t = g.left_target if h == "left" else g.right_target
-        t.header.frame_id = "root_link"
-        t.pose.position.x, t.pose.position.y, t.pose.position.z = (float(v) for v in p)
-    return g
+    return reach_goal_message(targets, tau, use_torso=torso)
 
 
 def test_reach_action_arrives_within_1cm_in_the_physics(everyday):

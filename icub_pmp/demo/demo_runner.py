@@ -14,6 +14,7 @@ import numpy as np
 from icub_pmp.kinematics import IcubModel
 from icub_pmp.ros.conversions import arrays_to_trajectory, time_to_sec
 from icub_pmp.ros.probe import RosProbe
+from icub_pmp.ros.reach_goal_message import reach_goal_message
 
 __all__ = ["PROVISIONAL_PHASES", "DemoRunner", "PhaseResult"]
 
@@ -291,14 +292,7 @@ class DemoRunner:
         names."""
         from icub_interfaces.action import Reach
 
-        goal = Reach.Goal()
-        goal.hands = [h for h in ("left", "right") if h in targets]
-        goal.use_torso = use_torso
-        goal.tau = tau
-        for h, p in targets.items():
-            t = goal.left_target if h == "left" else goal.right_target
-            t.header.frame_id = "root_link"
-            t.pose.position.x, t.pose.position.y, t.pose.position.z = (float(v) for v in p)
+        goal = reach_goal_message(targets, tau, use_torso=use_torso)
         goal.obstacles = list(obstacles or [])
         goal.obstacle_clearance = float(obstacle_clearance)
         for h, f in (forces or {}).items():

@@ -57,6 +57,7 @@ import numpy as np
 from icub_pmp.config import repo_root
 from icub_pmp.graph import NodeGraph, NodeProcess, param_text, reserve_domain_id, ros_environment
 from icub_pmp.kinematics import IcubModel, RobotSpec
+from icub_pmp.ros.reach_goal_message import reach_goal_message
 
 if TYPE_CHECKING:
     from icub_pmp.demo.demo_runner import DemoRunner
@@ -265,12 +266,7 @@ class _Driver:
         planner's body model stands for)."""
         from icub_interfaces.action import Reach
 
-        goal = Reach.Goal()
-        goal.hands = ["right"]
-        goal.tau = tau
-        goal.right_target.header.frame_id = "root_link"
-        p = goal.right_target.pose.position
-        p.x, p.y, p.z = (float(v) for v in target)
+        goal = reach_goal_message({"right": target}, tau)
         res = self.probe.send_goal(self._client("/pmp/reach_action", Reach), goal, 900.0).result
         executed = res.outcome in ("reached", "not_reached")
         true = (float(np.linalg.norm(self.true_hand(offset) - target)) if executed

@@ -48,6 +48,7 @@ from icub_pmp.peripersonal.tabletop_task import (
     TabletopTaskConfig,
     TaskPlan,
 )
+from icub_pmp.ros.reach_goal_message import reach_goal_message
 
 __all__ = ["PLANNER_PARAMETERS", "ServicePairCheck", "execute_over_dds", "graph_parameters",
            "set_parameters", "main"]
@@ -139,15 +140,7 @@ def _reach(runner: object, targets: dict[str, np.ndarray], frozen: tuple[str, ..
     """One /pmp/reach_action goal; returns (outcome, message)."""
     from icub_interfaces.action import Reach
 
-    goal = Reach.Goal()
-    goal.hands = [h for h in HANDS if h in targets]
-    goal.use_torso = False
-    goal.tau = tau
-    goal.frozen_joints = list(frozen)
-    for h, p in targets.items():
-        t = goal.left_target if h == "left" else goal.right_target
-        t.header.frame_id = "root_link"
-        t.pose.position.x, t.pose.position.y, t.pose.position.z = (float(v) for v in p)
+    goal = reach_goal_message(targets, tau, frozen_joints=frozen)
     res = runner.probe.send_goal(runner._action("/pmp/reach_action", Reach), goal, 900.0).result
     return res.outcome, res.message
 

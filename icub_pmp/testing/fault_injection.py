@@ -26,6 +26,7 @@ from typing import Any
 
 from icub_pmp.graph import NodeGraph
 from icub_pmp.ros.probe import RosProbe
+from icub_pmp.ros.reach_goal_message import reach_goal_message
 from icub_pmp.testing.graph_interfaces import PERIPERSONAL_FUZZ_MAPS
 
 __all__ = ["FaultInjector", "FaultOutcome", "FAULT_GRAPH", "FAULT_PARAMS", "FULL_FAULT_GRAPH",
@@ -92,16 +93,7 @@ def format_table(rows: list[FaultOutcome]) -> str:
 
 def reach_goal(target: list[float], tau: float = 1.5) -> Any:
     """A right-hand reach goal for ``/pmp/reach_action`` to ``target`` [m, root_link]."""
-    from icub_interfaces.action import Reach
-
-    g = Reach.Goal()
-    g.hands = ["right"]
-    g.tau = tau
-    g.right_target.header.frame_id = "root_link"
-    p = g.right_target.pose.position
-    p.x, p.y, p.z = (float(v) for v in target)
-    g.right_target.pose.orientation.w = 1.0
-    return g
+    return reach_goal_message({"right": target}, tau)
 
 
 class _StatusLog:
