@@ -19,6 +19,10 @@ compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
    factor from /clock over a wall-clock window: ``lockstep_rtf`` with the estimator on every
    1 kHz sample, ``lockstep_rtf_estimator_100hz`` with it on one sample in 10 (the rate of
    wholeBodyDynamics on the robot), ``lockstep_rtf_no_estimator`` without it (baseline).
+   ``lockstep_rtf`` is the composed ``torque_loop`` process (the estimator and controller
+   nodes in one process, the estimate handed over in-process: docs/decisions/0067), the
+   shipped way to run the torque loop at 1 kHz; ``lockstep_rtf_separate`` the same loop with
+   the two nodes in their own processes (the estimate over DDS).
 
 4. Realism (issue 17), both simulator presets in the same run, nested under ``ideal`` /
    ``icub``: the tracking of 2 (with friction compensation on, for both) and, over DDS,
@@ -26,9 +30,11 @@ compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
    (``wait_for_estimate``, the shipped default, acts in lockstep: each controller step waits
    for the estimate of its own joint state), ``stale_estimate_steps`` (controller steps with
    the torque loop on and no fresh estimate, from /impedance_controller/status; goal 0) and
-   ``controller_steps``; for ``icub``, then the estimator is killed:
-   ``estimator_stop_safe_hold_s`` (simulated) and ``_wall_s`` until the status says
-   safe_hold, and its reason.
+   ``controller_steps`` (the composed process; ``lockstep_rtf_separate`` and its
+   ``separate`` figures beside); for ``icub``, then the estimator stops (in the composed
+   process its ``enabled`` parameter is set false: no sample processed, nothing published,
+   as a stopped wholeBodyDynamics device): ``estimator_stop_safe_hold_s`` (simulated) and
+   ``_wall_s`` until the status says safe_hold, and its reason.
 
 Each DDS run also gives ``cpu_us_per_sim_ms``: CPU time [us] per simulated ms of each node
 process (/proc), far less load-sensitive than the wall-clock rtf (docs/decisions/0065).
@@ -140,12 +146,14 @@ def bench_tracking(sim: Simulator, friction_compensation: bool = False) -> dict:
 
 def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
               stop_estimator: bool = False,
-              extra: dict[str, dict[str, object]] | None = None) -> dict:
+              extra: dict[str, dict[str, object]] | None = None,
+              composed: bool = False) -> dict:
     """Lockstep real-time factor of sim_bridge + wrench_estimator (one joint-state sample in
     ``sample_every``; None = no estimator) + impedance_controller, on the realism ``preset``;
     the controller's stale-estimate count; with ``stop_estimator``, the time to the safe hold
-    once the estimator is killed; ``extra`` {node: {parameter: value}} overrides the
-    bench's parameters (experiments)."""
+    once the estimator is killed (``composed``: disabled); ``extra`` {node: {parameter:
+    value}} overrides the bench's parameters (experiments); ``composed``: the estimator and
+    the controller in one ``torque_loop`` process."""
     from rosgraph_msgs.msg import Clock
 
     from icub_interfaces.msg import ControllerStatus
@@ -168,7 +176,9 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
     for node, values in (extra or {}).items():
         params.setdefault(node, {}).update(values)
     nodes = ["sim_bridge", "impedance_controller"]
-    if sample_every is not None:
+    if composed and sample_every is not None:
+        nodes = ["sim_bridge", "torque_loop"]
+    elif sample_every is not None:
         nodes.insert(1, "wrench_estimator")
     with reserve_domain_id() as did:
         with NodeGraph(nodes, params, env=ros_environment(did)) as g:
@@ -207,7 +217,10 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
                                              for n in c0}}
                 if stop_estimator:
                     t_kill, w_kill = sim_t(), time.perf_counter()
-                    g.kill("wrench_estimator")
+                    if composed:
+                        _disable_estimator(probe)
+                    else:
+                        g.kill("wrench_estimator")
                     st = status()
                     while st.status != "safe_hold" and time.perf_counter() - w_kill < 60.0:
                         time.sleep(0.05)
@@ -220,6 +233,18 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
             finally:
                 probe.close()
     return out
+
+
+def _disable_estimator(probe) -> None:  # noqa: ANN001 (RosProbe: rclpy imported late)
+    """Set /wrench_estimator's ``enabled`` false (the estimator of a composed process stops)."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    value = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False)
+    req = SetParameters.Request(parameters=[Parameter(name="enabled", value=value)])
+    res = probe.call("/wrench_estimator/set_parameters", SetParameters, req)
+    if not res.results[0].successful:
+        raise RuntimeError(f"enabled: false refused: {res.results[0].reason}")
 
 
 def main() -> None:
@@ -238,9 +263,10 @@ def main() -> None:
     print(f"tracking: rms {out['tracking_rms_deg']:.4f} deg, final "
           f"{out['tracking_final_deg']:.4f} deg", file=sys.stderr)
     dds: dict = {}
-    for key, every in (("lockstep_rtf", 1), ("lockstep_rtf_estimator_100hz", 10),
-                       ("lockstep_rtf_no_estimator", None)):
-        r = bench_dds(window, every)
+    for key, every, composed in (("lockstep_rtf", 1, True), ("lockstep_rtf_separate", 1, False),
+                                 ("lockstep_rtf_estimator_100hz", 10, False),
+                                 ("lockstep_rtf_no_estimator", None, False)):
+        r = bench_dds(window, every, composed=composed)
         dds[key] = dict(r)
         out[key] = r["rtf"]
         out[f"{key}_timeouts"] = r["timeouts"]
@@ -251,11 +277,15 @@ def main() -> None:
         fig = {k: v for k, v in bench_tracking(psim, friction_compensation=True).items()
                if k != "tracking_max_deg"}
         del psim
-        # ideal: the run above (estimator on every sample) is that figure
+        # ideal: the runs above (estimator on every sample) are those figures
         r = dict(dds["lockstep_rtf"]) if preset == "ideal" else bench_dds(
-            window, 1, preset, stop_estimator=True)
+            window, 1, preset, stop_estimator=True, composed=True)
+        sep = dict(dds["lockstep_rtf_separate"]) if preset == "ideal" else bench_dds(
+            window, 1, preset)
         fig["lockstep_rtf"] = r.pop("rtf")
         fig.update({k: v for k, v in r.items() if k != "window_s"})
+        fig["lockstep_rtf_separate"] = sep.pop("rtf")
+        fig["separate"] = {k: v for k, v in sep.items() if k != "window_s"}
         out[preset] = fig
         print(f"{preset}: {fig}", file=sys.stderr)
     out["load_start"] = load0

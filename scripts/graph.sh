@@ -7,6 +7,9 @@
 #   scripts/graph.sh                 # all nodes
 #   GRAPH_NODES="sim_bridge pmp_planner" scripts/graph.sh
 #   MODE=lockstep scripts/graph.sh   # simulator and controller in lockstep (exact 1 kHz loop)
+# wrench_estimator and impedance_controller run composed in one process, torque_loop
+# (scripts/torque_loop.sh, docs/decisions/0067);
+#   TORQUE_LOOP=0 scripts/graph.sh  # ... or in their own processes
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # SIGINT ignored on entry (bit 2 of SigIgn): re-exec with it restored, once
@@ -20,7 +23,12 @@ if [[ ! -f "$ROOT/install/.build-stamp" ]]; then
   exit 2
 fi
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
-DEFAULT="sim_bridge wrench_estimator impedance_controller pmp_planner cartesian_solver gaze_controller motion_segmenter robot_state_publisher"
+DEFAULT="sim_bridge torque_loop pmp_planner cartesian_solver gaze_controller motion_segmenter robot_state_publisher"
+case "${TORQUE_LOOP:-1}" in
+  1|"") ;;
+  0) DEFAULT="${DEFAULT/torque_loop/wrench_estimator impedance_controller}" ;;
+  *) echo "graph.sh: TORQUE_LOOP must be 0 or 1, got '${TORQUE_LOOP}'" >&2; exit 2 ;;
+esac
 NODES="${GRAPH_NODES:-$DEFAULT}"
 PIDS=()
 stop() {

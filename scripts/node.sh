@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Start one node with its parameter file: scripts/node.sh NODE [--ros-args EXTRA...]
 # = ros2 run icub_pmp NODE --ros-args --params-file config/NODE.yaml EXTRA...
-# The per-node scripts (scripts/sim_bridge.sh, ...) call this.
+# The per-node scripts (scripts/sim_bridge.sh, ...) call this. torque_loop (the
+# wrench_estimator and impedance_controller nodes in one process) reads both their files.
 set -eo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 NODE="${1:?usage: scripts/node.sh NODE [--ros-args ...]}"; shift
@@ -14,8 +15,15 @@ if [[ ! -x "$ROOT/install/icub_pmp/lib/icub_pmp/$NODE" ]]; then
   exit 2
 fi
 ARGS=()
-PARAMS="$ROOT/config/$NODE.yaml"
-[[ -f "$PARAMS" ]] && ARGS+=(--params-file "$PARAMS")
+# a composed process reads the parameter file of each node it hosts
+case "$NODE" in
+  torque_loop) CONFIGS="wrench_estimator impedance_controller" ;;
+  *) CONFIGS="$NODE" ;;
+esac
+for c in $CONFIGS; do
+  PARAMS="$ROOT/config/$c.yaml"
+  [[ -f "$PARAMS" ]] && ARGS+=(--params-file "$PARAMS")
+done
 if [[ "${1:-}" == "--ros-args" ]]; then shift; fi
 ARGS+=("$@")
 echo "$NODE.sh: ros2 run icub_pmp $NODE --ros-args ${ARGS[*]} (ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-42})" >&2

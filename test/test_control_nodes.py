@@ -1,6 +1,8 @@
 """End to end over DDS: sim_bridge (lockstep) + wrench_estimator + impedance_controller as
 subprocesses started through their scripts, in a private domain; the test talks to them as a
-user would (topics, services), in simulated time."""
+user would (topics, services), in simulated time. Every test runs twice: with the estimator
+and the controller in their own processes, and composed in the torque_loop process
+(docs/decisions/0067)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,8 @@ import time
 import numpy as np
 import pytest
 from geometry_msgs.msg import Wrench, WrenchStamped
+from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+from rcl_interfaces.srv import SetParameters
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -31,7 +35,9 @@ from icub_pmp.testing import (
     with_realism,
 )
 
-NODES = ["sim_bridge", "wrench_estimator", "impedance_controller"]
+#: the two ways to run the torque loop: separate processes, one composed process
+GRAPHS = {"separate": ["sim_bridge", "wrench_estimator", "impedance_controller"],
+          "torque_loop": ["sim_bridge", "torque_loop"]}
 
 
 class _Recorder:
@@ -65,8 +71,8 @@ class _Recorder:
         self.subs = []
 
 
-@pytest.fixture(scope="module")
-def graph(ros_domain_id):
+@pytest.fixture(scope="module", params=list(GRAPHS))
+def graph(ros_domain_id, request):
     env = ros_environment(ros_domain_id)
     # the ideal simulator: these tests check the loop and the estimator against exact
     # sensors and model (test_control_realism.py and test_dynamics_calibration_node.py: icub)
@@ -75,7 +81,7 @@ def graph(ros_domain_id):
         "wrench_estimator": {},
         "impedance_controller": {"use_sim_time": True},
     })
-    with NodeGraph(NODES, params, env=env) as g:
+    with NodeGraph(GRAPHS[request.param], params, env=env) as g:
         yield g
 
 
@@ -159,7 +165,7 @@ def test_trajectory_is_followed_and_bad_ones_are_rejected(graph, probe):
     js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
     q = dict(zip(js.name, js.position))["r_elbow"]
     assert abs(math.degrees(q - target)) < 0.5
-    out = graph.procs["impedance_controller"].output()
+    out = graph.procs[graph.host("impedance_controller")].output()
     assert out.count("/joint_trajectory rejected") >= 3, out[-3000:]
     assert "NaN" in out and "r_knee" in out and "strictly increasing" in out
     probe.destroy(pub)
@@ -214,9 +220,6 @@ def test_runtime_parameters_and_velocity_command(graph, probe):
     """Gains and mode change at run time with validation (an unknown mode and a wrong-length
     gain vector are refused, a valid mode accepted); a velocity command (eq 7) republished
     every 0.1 s at 0.2 rad/s moves r_shoulder_yaw by about 0.2 rad/s x its duration."""
-    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-    from rcl_interfaces.srv import SetParameters
-
     def set_param(name: str, value: ParameterValue) -> bool:
         req = SetParameters.Request(parameters=[Parameter(name=name, value=value)])
         return probe.call("/impedance_controller/set_parameters", SetParameters,
@@ -229,7 +232,8 @@ def test_runtime_parameters_and_velocity_command(graph, probe):
     assert not set_param("impedance_stiffness_arm", bad)
     s.string_value = "position"
     assert set_param("mode", s)
-    assert graph.procs["impedance_controller"].wait_for_output("mode impedance -> position", 20)
+    ctl = graph.procs[graph.host("impedance_controller")]
+    assert ctl.wait_for_output("mode impedance -> position", 20)
 
     qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
     pub = probe.node.create_publisher(JointState, "/impedance_controller/velocity_command", qos)
@@ -253,17 +257,24 @@ def test_runtime_parameters_and_velocity_command(graph, probe):
 
 
 def test_hold_service_and_estimate_watchdog(graph, probe):
-    """/impedance_controller/hold answers success; killing the estimator latches a safe hold
-    within estimate_lost_timeout (0.5 s of simulated time), said in the log and on the
-    latched status topic, while the controller keeps answering the simulator."""
+    """/impedance_controller/hold answers success; killing the estimator (composed: its
+    ``enabled`` set false) latches a safe hold within estimate_lost_timeout (0.5 s of
+    simulated time), said in the log and on the latched status topic, while the controller
+    keeps answering the simulator."""
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     from icub_interfaces.msg import ControllerStatus
 
     resp = probe.call("/impedance_controller/hold", Trigger, Trigger.Request())
     assert resp.success, resp.message
-    graph.kill("wrench_estimator")
-    ctl = graph.procs["impedance_controller"]
+    if graph.host("wrench_estimator") == "wrench_estimator":
+        graph.kill("wrench_estimator")
+    else:  # composed: the estimator in the controller's process stops
+        value = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False)
+        req = SetParameters.Request(parameters=[Parameter(name="enabled", value=value)])
+        res = probe.call("/wrench_estimator/set_parameters", SetParameters, req)
+        assert res.results[0].successful, res.results[0].reason
+    ctl = graph.procs[graph.host("impedance_controller")]
     assert ctl.wait_for_output("estimator lost", 60.0), ctl.output()[-3000:]
     latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)

@@ -53,6 +53,7 @@ class WrenchEstimatorConfig(ConfigBase):
     require_same_stamp: bool = True  # node: joint states and FT must carry the same stamp
     stale_timeout: float = 0.1  # node: FT older than this (vs joint states) is stale [s]
     publish_every: int = 1  # node: wrench/contact/predicted-FT topics every N samples
+    enabled: bool = True  # node: false = no sample processed, nothing published (stopped)
 
     @property
     def sample_rate_hz(self) -> float:

@@ -41,7 +41,13 @@ once and shown on the status topic. A joint state older than the newest (a resta
 simulator: simulated time went back, :class:`~icub_pmp.time_jump_detector.TimeJumpDetector`)
 ends the running goals, drops the old timeline's estimate and the lockstep estimate gate and
 holds the measured posture; it is said in the log. All :class:`ImpedanceControllerConfig`
-parameters can change at run time (validated). """
+parameters can change at run time (validated).
+
+In-process inputs (``in_process_inputs=True``, the composed ``torque_loop`` process of
+:mod:`icub_pmp.nodes.torque_loop`): the node does not subscribe to /joint_states and
+/estimated_joint_torques; whoever hosts it hands them over with :meth:`take_joint_state` (the
+message's bytes) and :meth:`take_estimate` (stamp, names, torques), with the same checks and
+the same lockstep gate as the subscriptions. """
 
 from __future__ import annotations
 
@@ -86,7 +92,9 @@ _TRAJ_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 class ImpedanceControllerNode(Node):
     """The impedance_controller node (module doc)."""
 
-    def __init__(self) -> None:
+    def __init__(self, in_process_inputs: bool = False) -> None:
+        """``in_process_inputs``: joint states and estimates come by direct calls (module
+        doc), not from their topics."""
         super().__init__("impedance_controller")
         self.params = ConfigParameters(self, ImpedanceControllerConfig,
                                        on_change=self._on_config_change)
@@ -117,10 +125,11 @@ class ImpedanceControllerNode(Node):
         # the two 1 kHz inputs are read from their bytes (raw_messages), not deserialised
         self._js_reader = RawJointStateReader()
         self._est_reader = RawJointStateReader()
-        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd,
-                                 raw=True)
-        self.create_subscription(JointState, "/estimated_joint_torques", self._on_estimate, sd,
-                                 raw=True)
+        if not in_process_inputs:
+            self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd,
+                                     raw=True)
+            self.create_subscription(JointState, "/estimated_joint_torques", self._on_estimate,
+                                     sd, raw=True)
         self.create_subscription(JointTrajectory, "/joint_trajectory", self._on_trajectory,
                                  _TRAJ_QOS)
         self.create_subscription(JointState, "/impedance_controller/velocity_command",
@@ -223,6 +232,20 @@ class ImpedanceControllerNode(Node):
                 if held is not None:
                     self._step(*held)
 
+    def take_joint_state(self, data: bytes) -> None:
+        """A /joint_states message (its CDR bytes) handed over in-process (module doc)."""
+        self._on_joint_state(data)
+
+    def take_estimate(self, stamp_ns: int, names: list[str], tau: np.ndarray) -> None:
+        """The joint torques ``tau`` [N m] of ``names`` estimated for the joint state stamped
+        ``stamp_ns`` [ns], handed over in-process (module doc)."""
+        try:
+            self.controller.set_estimate(stamp_ns * 1e-9, names, tau)
+        except IcubPmpError as exc:
+            self._warn("estimate", f"in-process estimate dropped: {exc}")
+            return
+        self._estimate_arrived(stamp_ns)
+
     def _on_estimate(self, data: bytes) -> None:
         try:
             msg = read_joint_state(self._est_reader, data)
@@ -234,6 +257,10 @@ class ImpedanceControllerNode(Node):
         except IcubPmpError as exc:
             self._warn("estimate", f"/estimated_joint_torques dropped: {exc}")
             return
+        self._estimate_arrived(ns)
+
+    def _estimate_arrived(self, ns: int) -> None:
+        """The estimate stamped ``ns`` is stored: step the joint state waiting for it."""
         if ns > self._est_ns:
             self._est_gap_ns, self._est_ns = ns - self._est_ns, ns
         sample = self.gate.estimate(ns)

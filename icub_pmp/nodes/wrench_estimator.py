@@ -34,14 +34,21 @@ synchronised sample in ``sample_every`` is processed (wholeBodyDynamics runs at 
 robot: ``sample_every: 10`` at 1 kHz). The joint torques are published for every processed
 sample, the other topics every ``publish_every`` processed samples. Parameters:
 :class:`WrenchEstimatorConfig` fields (``config/wrench_estimator.yaml``); ``rfrr_enabled``,
-``rfrr_learning``, ``contact_*``, ``require_same_stamp``, ``stale_timeout`` and
-``publish_every`` change at run time, the others rebuild the estimator (its learnt RFRR
-state is lost).
+``rfrr_learning``, ``contact_*``, ``require_same_stamp``, ``stale_timeout``,
+``publish_every`` and ``enabled`` (false: FT wrenches and joint states are ignored, nothing
+is published, as a stopped estimator) change at run time, the others rebuild the estimator
+(its learnt RFRR state is lost).
+
+In-process listeners (the composed ``torque_loop`` process, :mod:`icub_pmp.nodes.torque_loop`):
+``joint_state_listener`` gets the bytes of every /joint_states message on arrival (before the
+estimator looks at it), ``estimate_listener`` gets the joint torques of every processed sample
+(stamp [ns], joint names, torques [N m]) before they are published.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 from geometry_msgs.msg import WrenchStamped
@@ -76,7 +83,8 @@ __all__ = ["WrenchEstimatorNode", "main"]
 
 #: parameters applied to the running estimator; any other change rebuilds it
 _LIVE = {"rfrr_enabled", "rfrr_learning", "contact_force_on", "contact_force_off",
-         "contact_min_samples", "require_same_stamp", "stale_timeout", "publish_every"}
+         "contact_min_samples", "require_same_stamp", "stale_timeout", "publish_every",
+         "enabled"}
 _FT_TOPIC = {"left": "l_arm_ft", "right": "r_arm_ft"}
 _BUFFER = 64  # samples kept while waiting for the matching messages
 _FT_KEY = {h: f"/ft/{t}" for h, t in _FT_TOPIC.items()}  # the synchroniser's stream names
@@ -105,6 +113,9 @@ class WrenchEstimatorNode(Node):
         self.dropped = 0
         self.jumps = 0
         self.warn = WarningThrottle(self.get_logger())  # one budget per kind of warning
+        # in-process listeners (module doc): the composed torque_loop process sets them
+        self.joint_state_listener: Callable[[bytes], None] | None = None
+        self.estimate_listener: Callable[[int, list[str], np.ndarray], None] | None = None
 
         sd = qos_profile_sensor_data
         self.pub_tau = self.create_publisher(JointState, "/estimated_joint_torques", sd)
@@ -158,6 +169,11 @@ class WrenchEstimatorNode(Node):
             self.estimator = WrenchEstimator(new)
             self.get_logger().info(f"estimator rebuilt for {sorted(changed)}")
         self._update_imu_subscription(new)
+        if "enabled" in changed:
+            self.sync.reset()
+            self.get_logger().warning(
+                "estimator enabled: estimating again" if new.enabled else
+                "estimator disabled (enabled: false): no sample processed, nothing published")
 
     def _update_imu_subscription(self, config: WrenchEstimatorConfig) -> None:
         """Subscribe to /imu only while the gravity comes from it (saves the 1 kHz traffic)."""
@@ -205,6 +221,8 @@ class WrenchEstimatorNode(Node):
         self.warn(kind, text)
 
     def _on_ft(self, hand: str, data: bytes) -> None:
+        if not self.config.enabled:
+            return
         try:
             try:  # the numbers straight from the bytes (raw_messages), else deserialise
                 ns, w = raw_wrench_stamped(data)
@@ -248,6 +266,10 @@ class WrenchEstimatorNode(Node):
         return msg
 
     def _on_joint_state(self, data: bytes) -> None:
+        if self.joint_state_listener is not None:
+            self.joint_state_listener(data)
+        if not self.config.enabled:
+            return
         try:
             msg = self._read_joint_state(data)
         except IcubPmpError as exc:
@@ -301,6 +323,8 @@ class WrenchEstimatorNode(Node):
             self._warn("sample", f"sample at t = {ns * 1e-9:.3f} s dropped: {exc}")
             return
         self.samples += 1
+        if self.estimate_listener is not None:  # in-process: before anything is published
+            self.estimate_listener(ns, self.names, est.tau)
         if self.config.calibrate_at_startup and self._calibration_said != "done":
             self._report_startup_calibration()
         # serialised directly (raw_messages): the names are encoded once

@@ -7,14 +7,16 @@ default single-threaded executor (``rclpy.spin``: service-driven and camera-rate
 default executor) with ``spin_once`` in a loop: its ``spin()`` in the Jazzy wheel neither
 processes callbacks reliably nor returns on SIGINT. It can run a worker beside the executor
 (the simulator's physics loop) on its own thread; the node then stops when the worker returns
-or fails. Ctrl-C and external shutdowns end quietly; a node refusing its parameters
-(:class:`~icub_pmp.errors.ConfigError`) exits with a one-line message.
+or fails. :func:`spin_nodes` spins several nodes of one process on one ``EventsExecutor`` (a
+composed process: :mod:`icub_pmp.nodes.torque_loop`). Ctrl-C and external shutdowns end
+quietly; a node refusing its parameters (:class:`~icub_pmp.errors.ConfigError`) exits with a
+one-line message.
 """
 
 from __future__ import annotations
 
 import threading
-from typing import Callable, TypeVar
+from typing import Callable, Sequence, TypeVar
 
 import rclpy
 from rclpy.executors import Executor, ExternalShutdownException
@@ -23,7 +25,7 @@ from rclpy.node import Node
 
 from icub_pmp.errors import ConfigError
 
-__all__ = ["spin_node", "run_node", "guard_parameter_services"]
+__all__ = ["spin_node", "spin_nodes", "run_node", "guard_parameter_services"]
 
 N = TypeVar("N", bound=Node)
 
@@ -44,17 +46,34 @@ def spin_node(
     executor keeps spinning on the main thread (where rclpy's signal handling works). When the
     worker fails, the failure is logged and the process exits with status 1.
     """
+    _spin(lambda: [factory()], args, name, worker)
+
+
+def spin_nodes(factory: Callable[[], Sequence[Node]], args: list[str] | None = None,
+               name: str = "process") -> None:
+    """As :func:`spin_node` for the nodes ``factory()`` builds, all on one
+    ``EventsExecutor`` (so their callbacks never run at the same time)."""
+    _spin(factory, args, name, None)
+
+
+def _spin(factory: Callable[[], Sequence[Node]], args: list[str] | None, name: str,
+          worker: Worker | None) -> None:
+    """The body of :func:`spin_node` and :func:`spin_nodes` (``worker`` runs on the first
+    node)."""
     rclpy.init(args=args)
+    nodes: list[Node] = []
     node = None
     executor = None
     stop = threading.Event()
     thread = None
     failed: list[BaseException] = []
     try:
-        node = factory()
-        guard_parameter_services(node)
+        nodes = list(factory())
+        node = nodes[0]
         executor = EventsExecutor()
-        executor.add_node(node)
+        for n in nodes:
+            guard_parameter_services(n)
+            executor.add_node(n)
         if worker is not None:
             thread = threading.Thread(target=_run_worker, args=(worker, node, stop, failed),
                                       name=f"{name}-worker")
@@ -76,8 +95,8 @@ def spin_node(
         stop.set()
         if thread is not None:
             thread.join(timeout=10.0)
-        if node is not None:
-            node.destroy_node()
+        for n in nodes:
+            n.destroy_node()
         if executor is not None:
             executor.shutdown()
         rclpy.try_shutdown()

@@ -1,0 +1,142 @@
+"""The torque_loop process (wrench_estimator + impedance_controller composed in one process,
+docs/decisions/0067) over DDS in lockstep with sim_bridge on the ``icub`` preset, started
+through scripts/torque_loop.sh as a user does: the other nodes see the same two nodes and
+topics, every controller step uses the estimate of its own joint state, the robot reaches a
+target, and a stopped estimator ends in a safe hold that is said."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+from geometry_msgs.msg import WrenchStamped
+from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+from rcl_interfaces.srv import SetParameters
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
+
+from icub_interfaces.msg import ControllerStatus
+from icub_pmp.ros.conversions import arrays_to_trajectory
+from icub_pmp.ros.qos import LATCHED_QOS
+from icub_pmp.testing import NodeGraph, RosProbe, ros_environment, with_realism
+
+
+@pytest.fixture(scope="module")
+def graph(ros_domain_id):
+    params = with_realism("icub", {
+        "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10},
+        # per-node sections of the composed process (NodeGraph writes them to a file)
+        "wrench_estimator": {"publish_every": 10},
+        "impedance_controller": {"use_sim_time": True, "mode": "position",
+                                 "feedforward": "inverse_dynamics"},
+    })
+    with NodeGraph(["sim_bridge", "torque_loop"], params,
+                   env=ros_environment(ros_domain_id)) as g:
+        yield g
+
+
+@pytest.fixture(scope="module")
+def probe(graph, ros_domain_id):
+    p = RosProbe(ros_domain_id, "torque_loop_probe")
+    try:
+        assert p.wait_for_topic("/effort_command", 90), graph.outputs()
+        assert p.collect("/estimated_joint_torques", JointState, 1, 90.0), graph.outputs()
+        assert p.collect("/effort_command", JointState, 1, 90.0), graph.outputs()
+        yield p
+    finally:
+        p.close()
+
+
+def _status(probe: RosProbe) -> ControllerStatus:
+    s = probe.collect("/impedance_controller/status", ControllerStatus, 1, 30.0,
+                      qos=LATCHED_QOS)
+    assert s, "no /impedance_controller/status"
+    return s[0]
+
+
+def _sim_time(probe: RosProbe) -> float:
+    c = probe.collect("/clock", Clock, 1, 30.0)
+    assert c, "no /clock within 30 s"
+    return c[0].clock.sec + c[0].clock.nanosec * 1e-9
+
+
+def _wait_sim(probe: RosProbe, dt: float, timeout: float = 120.0) -> None:
+    t0 = t = _sim_time(probe)
+    deadline = time.monotonic() + timeout
+    while t - t0 < dt and time.monotonic() < deadline:
+        time.sleep(0.2)
+        t = _sim_time(probe)
+    assert t - t0 >= dt, f"simulated time advanced only {t - t0:.3f} s in {timeout} s"
+
+
+def test_one_process_serves_both_nodes_and_every_estimator_topic(graph, probe):
+    """The graph has the wrench_estimator and impedance_controller nodes (one process); the
+    estimator's joint torques (stamped like the joint states), hand wrenches, contact flags
+    and predicted FT wrenches are published; its calibration service answers."""
+    assert probe.wait_for(lambda: {"wrench_estimator", "impedance_controller"}
+                          <= {n.lstrip("/") for n in probe.node_names()}, 30.0), \
+        probe.node_names()
+    assert list(graph.procs) == ["sim_bridge", "torque_loop"]
+    for topic in ("/wrench_estimator/external_wrench/right_hand",
+                  "/wrench_estimator/external_wrench_root/left_hand",
+                  "/wrench_estimator/predicted_ft/r_arm_ft"):
+        assert probe.collect(topic, WrenchStamped, 2, 30.0), topic
+    assert probe.collect("/wrench_estimator/contact/right_hand", Bool, 2, 30.0)
+    est = probe.collect("/estimated_joint_torques", JointState, 5, 30.0)
+    for m in est:  # the stamp of the 1 kHz joint state it answers
+        assert m.header.stamp.nanosec % 1_000_000 == 0
+        assert len(m.effort) == len(m.name) >= 17  # torso and both arms at least
+        assert np.isfinite(m.effort).all()
+    resp = probe.call("/wrench_estimator/calibrate", Trigger, Trigger.Request())
+    assert resp.message  # success or the reason (a robot still moving), never silence
+
+
+def test_every_step_uses_the_estimate_of_its_own_joint_state(graph, probe):
+    """Over 0.5 s of simulated time in lockstep, the controller steps once per simulated
+    millisecond and no step runs without the estimate of its own joint state (the status
+    topic's stale_estimate_steps does not grow), and the torque loop is on."""
+    s0 = _status(probe)
+    _wait_sim(probe, 0.5)
+    s1 = _status(probe)
+    assert s1.steps - s0.steps >= 400, (s0.steps, s1.steps)
+    assert s1.stale_estimate_steps == s0.stale_estimate_steps, graph.outputs()[-3000:]
+    assert s1.status == "ok", (s1.status, s1.safe_hold_reason)
+    assert "lockstep: no /effort_command" not in graph.procs["sim_bridge"].output()
+
+
+def test_reaches_a_target_on_the_icub_preset(graph, probe):
+    """A /joint_trajectory (r_elbow +0.3 rad in 0.5 s) on the imperfect robot ends within
+    0.5 deg of its target (the issue's final-error goal) 0.5 s after its end."""
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    pub = probe.node.create_publisher(JointTrajectory, "/joint_trajectory", qos)
+    assert probe.wait_for(lambda: pub.get_subscription_count() > 0, 30.0)
+    js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
+    target = dict(zip(js.name, js.position))["r_elbow"] + 0.3
+    pub.publish(arrays_to_trajectory(["r_elbow"], [0.5], np.array([[target]])))
+    _wait_sim(probe, 1.0)
+    js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
+    q = dict(zip(js.name, js.position))["r_elbow"]
+    assert abs(math.degrees(q - target)) < 0.5, math.degrees(q - target)
+    probe.destroy(pub)
+
+
+def test_stopped_estimator_ends_in_a_said_safe_hold(graph, probe):
+    """With the estimator stopped (``enabled: false``: no sample processed, nothing
+    published), the controller latches the estimator-lost safe hold, says it in the log and
+    on its status topic, and keeps answering the simulator."""
+    value = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False)
+    req = SetParameters.Request(parameters=[Parameter(name="enabled", value=value)])
+    res = probe.call("/wrench_estimator/set_parameters", SetParameters, req)
+    assert res.results[0].successful, res.results[0].reason
+    proc = graph.procs["torque_loop"]
+    assert proc.wait_for_output("estimator lost", 60.0), proc.output()[-3000:]
+    assert probe.wait_for(lambda: _status(probe).status == "safe_hold", 30.0)
+    assert "estimator lost" in _status(probe).safe_hold_reason
+    assert not probe.collect("/estimated_joint_torques", JointState, 1, 2.0)
+    assert len(probe.collect("/effort_command", JointState, 20, 30.0)) == 20
