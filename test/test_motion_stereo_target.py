@@ -366,3 +366,45 @@ def test_a_target_whose_place_is_seen_empty_is_dropped_and_the_next_object_taken
             errs.append(np.linalg.norm(tg.position - centre))
     assert dropped_at is not None and 1.9 <= dropped_at <= 2.3, (dropped_at, states[30:70])
     assert max(errs) < 0.010, np.round(np.array(errs) * 1000, 1)
+
+
+def test_the_robots_own_hand_at_a_held_targets_place_is_not_taken_for_the_object(scene):
+    """The cylinder slides and stops (a still target); then it is taken away and the robot's
+    left hand comes to where its top was, in view of both eyes. The region search around the
+    target finds the hand there: it must not be measured as the object (motion or region), so
+    the target is held where the cylinder was or dropped, never re-centred on the hand. (In a
+    bench trial the held target's wide gate found the left hand and the reach went 17 cm
+    from the cylinder.)"""
+    from icub_pmp.vision.arm_segments import arm_segments
+
+    seg = {s: MotionSegmenter() for s in ("left", "right")}
+    target = StereoTarget(left=scene.camera)
+    model = HeadCameras().model
+    stop = np.array([-0.35, -0.10, -0.03])
+    start, vel = stop - np.array([0.0, -0.2, 0.0]) * 0.8, np.array([0.0, -0.2, 0.0])
+    hand_there = {"l_shoulder_pitch": -1.0, "l_shoulder_roll": 0.2, "l_shoulder_yaw": -0.3,
+                  "l_elbow": 0.3}  # l_hand_dh_frame 4 mm from (-0.35, -0.10, 0.04)
+    away = np.array([-0.9, 0.6, -0.03])
+    taken = []
+    for k in range(75):
+        t = k / 30.0
+        swapped = t >= 1.3
+        centre = away if swapped else start + vel * min(max(t - 0.1, 0.0), 0.8)
+        joints = dict(LOOK_DOWN, **(hand_there if swapped else {}))
+        scene.pose(joints, {"cylinder": centre, "box": [-0.52, -0.40, -0.05]})
+        f = scene.render()
+        rl, rr = seg["left"].process(f.left), seg["right"].process(f.right)
+        res = target.process(t, f.left, f.right, rl, rr, f.poses, arm_segments(model, f.joints))
+        if 1.1 <= t < 1.3:
+            assert res.target.valid and res.target.state == "still", (k, res.note)
+            assert np.linalg.norm(res.target.position - stop) < 0.01
+        if swapped:
+            hand = model.frame_position(model.q_from_dict(
+                {j: v for j, v in f.joints.items() if j in model.joint_names},
+                np.zeros(model.nq)), "l_hand_dh_frame")
+            assert np.linalg.norm(hand - (stop + [0, 0, 0.07])) < 0.01  # the hand is there
+            if res.measurement is not None:
+                taken.append((k, res.source, np.round(res.measurement.position, 3).tolist()))
+            if res.target.valid:
+                assert np.linalg.norm(res.target.position - stop) < 0.01, (k, res.note)
+    assert not taken, taken

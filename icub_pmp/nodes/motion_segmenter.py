@@ -61,6 +61,7 @@ from icub_pmp.vision import (
     StereoTargetConfig,
     TrackedObject,
 )
+from icub_pmp.vision.arm_segments import arm_segments
 from icub_pmp.vision.eye_calibration import EyeCalibration
 from icub_pmp.vision.head_cameras import HeadCameras
 
@@ -271,7 +272,7 @@ class MotionSegmenterNode(Node):
             poses = self.cameras.poses(state.positions)
             if self.calibration is not None:
                 poses = self.calibration.poses(poses)
-            segments = self._arm_segments(state.positions)
+            segments = arm_segments(self.cameras.model, state.positions)
             points_fn = None
             if self.eye_hand is not None:
                 eyes = [state.positions[j] for j in ("eyes_tilt", "eyes_version",
@@ -286,18 +287,6 @@ class MotionSegmenterNode(Node):
         if res.target.valid:
             self._publish(res.target, res.source, 0 if res.measurement is None
                           else res.measurement.n_points)
-
-    def _arm_segments(self, positions: dict[str, float]) -> np.ndarray:
-        """(4, 2, 3) elbow-wrist and wrist-hand segments of both arms in root_link [m]."""
-        model = self.cameras.model
-        q = model.q_from_dict({j: v for j, v in positions.items() if j in model.joint_names},
-                              np.zeros(model.nq))
-        out = []
-        for p in ("l", "r"):
-            e, w, h = (model.frame_position(q, f"{p}_{f}") for f in
-                       ("elbow_1", "wrist_1", "hand_dh_frame"))
-            out += [(e, w), (w, h)]
-        return np.array(out)
 
     def _publish(self, t: TrackedObject, source: str, points: int) -> None:
         stamp = sec_to_time(t.stamp)

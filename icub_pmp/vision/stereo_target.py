@@ -153,10 +153,11 @@ class StereoTarget:
         re-centred on what it found until it no longer moves (the gate cut the object's side
         that lies beyond it, so a measurement that moved is biased towards the old place);
         when nothing is found there, the object is looked for within ``track_gate`` of the
-        target (not on the robot's own arm) and re-centred the same way.
+        target and re-centred the same way. What either search finds on the robot's own arm
+        (within ``self_radius`` of ``self_segments``) is not the object.
 
         Raises:
-            ObjectNotFound: no object there.
+            ObjectNotFound: no object there (reason ``self``: only the robot's arm).
         """
         c = self.config
         tight = max(0.015, 2.0 * self._sigma(target))
@@ -174,14 +175,17 @@ class StereoTarget:
             if c.track_gate <= tight:
                 raise
             m, seed = measure(target.top, target.radius, target.height, c.track_gate)
-            if self._is_self(m, self_segments):
-                raise ObjectNotFound("self", "only the robot's own arm near the target") \
-                    from None
+        if self._is_self(m, self_segments):
+            # also within the tight gate: a target held for long has a wide covariance, and
+            # the robot's hand beside its place was taken for the object (bench trial, 0058)
+            raise ObjectNotFound("self", "only the robot's own arm near the target")
         if np.linalg.norm(m.top - target.top) >= 0.5 * tight:
             for _ in range(_RECENTRE):
                 try:
                     m2, seed2 = measure(m.top, m.radius, m.height, tight)
                 except ObjectNotFound:
+                    break
+                if self._is_self(m2, self_segments):
                     break
                 moved = float(np.linalg.norm(m2.top - m.top))
                 m, seed = m2, seed2
