@@ -65,7 +65,7 @@ def segmenter_node(ros_domain_id):
         node.stop()
 
 
-def _publish_frames(probe, frames, period=0.08):
+def _publish_frames(probe, frames, period=0.08, t0=1.0):
     node = probe.node
     sd = qos_profile_sensor_data
     pubs = {s: node.create_publisher(Image, f"/cam/{s}/image_raw", sd) for s in ("left", "right")}
@@ -75,7 +75,7 @@ def _publish_frames(probe, frames, period=0.08):
     assert probe.wait_for(lambda: all(p.get_subscription_count() > 0 for p in pubs.values()),
                           30.0)
     for f in frames:
-        stamp = sec_to_time(1.0 + f.index / 30.0)
+        stamp = sec_to_time(t0 + f.index / 30.0)
         names = list(f.joints)
         joints.publish(make_joint_state(names, position=[f.joints[n] for n in names],
                                         stamp=stamp))
@@ -266,3 +266,19 @@ def test_node_with_simulator(segmenter_node, ros_probe, ros_domain_id):
     finally:
         rc = sim.stop()
         assert rc == 0, sim.output()[-3000:]
+
+
+def test_reset_target_forgets_the_followed_object(segmenter_node, ros_probe, frames):
+    """/motion/reset_target drops the target the frames gave (no /motion/target until an
+    object moves again); a second call says there was none."""
+    from std_srvs.srv import Trigger
+
+    targets = []
+    sub = ros_probe.node.create_subscription(PointStamped, "/motion/target", targets.append, 10)
+    _publish_frames(ros_probe, frames, t0=50.0)  # after the other tests' frames and clock
+    assert ros_probe.wait_for(lambda: len(targets) >= 5, 10.0), segmenter_node.output()
+    first = ros_probe.call("/motion/reset_target", Trigger, Trigger.Request(), timeout=30.0)
+    assert first.success and first.message == "target dropped", first.message
+    again = ros_probe.call("/motion/reset_target", Trigger, Trigger.Request(), timeout=30.0)
+    assert again.success and again.message == "no target was followed", again.message
+    ros_probe.node.destroy_subscription(sub)

@@ -216,6 +216,14 @@ class DemoRunner:
         if not res.success:
             raise RuntimeError(f"/gaze/set_tracking {on}: {res.message}")
 
+    def reset_target(self) -> None:
+        """Make the motion segmenter forget the object it follows (/motion/reset_target)."""
+        from std_srvs.srv import Trigger
+
+        res = self.probe.call("/motion/reset_target", Trigger, Trigger.Request(), timeout=30.0)
+        if not res.success:
+            raise RuntimeError(f"/motion/reset_target: {res.message}")
+
     def contacts(self) -> dict[str, bool]:
         """The wrench estimator's contact flag per hand (False if none received)."""
         return {h: bool(getattr(self.latest.get(f"contact_{h}"), "data", False))

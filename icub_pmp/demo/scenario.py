@@ -384,6 +384,9 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     runner.look_at(np.array([-0.36, float(start[1] + 0.5 * velocity[1] * duration), -0.03]))
     runner.set_object("cylinder", start)
     runner.wait_sim(0.3)
+    # a new object is shown: what the eyes followed before (a place the last reach left, a
+    # target held for up to hold_time) must not keep the gaze away from it (0058, rule 12)
+    runner.reset_target()
     runner.set_tracking(True)
     runner.estimates.clear()
     # the simulator moves the cylinder in simulated time: it stops at exactly t_end

@@ -17,6 +17,8 @@ publishes   /motion/left/mask, /motion/right/mask (sensor_msgs/Image mono8, 255 
             that stops is kept and measured in its own image region),
             /motion/target/estimate (icub_interfaces/VisualTarget): the same with its
             covariance, top face, size, velocity and state.
+services    /motion/reset_target (std_srvs/Trigger): forget the followed object (the next
+            object seen moving becomes the target), e.g. before a new object is shown.
 
 Parameters: the fields of :class:`~icub_pmp.vision.MotionSegmenterConfig`, of
 :class:`~icub_pmp.vision.StereoTargetConfig` and of
@@ -36,6 +38,7 @@ from geometry_msgs.msg import PointStamped
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import CameraInfo, Image, RegionOfInterest
+from std_srvs.srv import Trigger
 
 from icub_interfaces.msg import MotionBlob as MotionBlobMsg
 from icub_interfaces.msg import MotionBlobs as MotionBlobsMsg
@@ -123,12 +126,24 @@ class MotionSegmenterNode(Node):
             for s in SIDES
         ]
         self.joints = JointStateCache(self, history=1.0)
+        self.srv_reset = self.create_service(Trigger, "/motion/reset_target",
+                                             self._on_reset_target)
         c = self.config
         self.get_logger().info(
             f"motion_segmenter: {c.image_width}x{c.image_height}, grid step {c.grid_step} px, "
             f"window {c.win_size}, theta_m {c.theta_m}; stereo target: depth "
             f"{self.stereo_config.min_depth}-{self.stereo_config.max_depth} m"
         )
+
+    def _on_reset_target(self, _req: Trigger.Request, res: Trigger.Response
+                         ) -> Trigger.Response:
+        """/motion/reset_target: drop the followed object."""
+        had = self.target.tracker.target.valid
+        self.target.reset()
+        res.success = True
+        res.message = "target dropped" if had else "no target was followed"
+        self.get_logger().info(f"/motion/reset_target: {res.message}")
+        return res
 
     # ------------------------------------------------------------------ parameters
     @property
