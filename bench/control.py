@@ -35,6 +35,10 @@ compute time per step, tracking of a 2 s minimum-jerk joint trajectory.
    process its ``enabled`` parameter is set false: no sample processed, nothing published,
    as a stopped wholeBodyDynamics device): ``estimator_stop_safe_hold_s`` (simulated) and
    ``_wall_s`` until the status says safe_hold, and its reason.
+   ``lockstep_rtf_robot_loop`` and its ``robot_loop`` figures (``stale_estimate_steps``,
+   ``cpu_us_per_sim_ms``...): the same loop with the simulator, the estimator and the
+   controller in one ``robot_loop`` process, the whole 1 kHz loop on the physics thread
+   (docs/decisions/0068; opt-in, not the default graph).
 
 Each DDS run also gives ``cpu_us_per_sim_ms``: CPU time [us] per simulated ms of each node
 process (/proc), far less load-sensitive than the wall-clock rtf (docs/decisions/0065).
@@ -147,13 +151,14 @@ def bench_tracking(sim: Simulator, friction_compensation: bool = False) -> dict:
 def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
               stop_estimator: bool = False,
               extra: dict[str, dict[str, object]] | None = None,
-              composed: bool = False) -> dict:
+              composed: bool = False, robot_loop: bool = False) -> dict:
     """Lockstep real-time factor of sim_bridge + wrench_estimator (one joint-state sample in
     ``sample_every``; None = no estimator) + impedance_controller, on the realism ``preset``;
     the controller's stale-estimate count; with ``stop_estimator``, the time to the safe hold
     once the estimator is killed (``composed``: disabled); ``extra`` {node: {parameter:
     value}} overrides the bench's parameters (experiments); ``composed``: the estimator and
-    the controller in one ``torque_loop`` process."""
+    the controller in one ``torque_loop`` process; ``robot_loop``: the simulator, the
+    estimator and the controller in one ``robot_loop`` process (0068)."""
     from rosgraph_msgs.msg import Clock
 
     from icub_interfaces.msg import ControllerStatus
@@ -176,7 +181,9 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
     for node, values in (extra or {}).items():
         params.setdefault(node, {}).update(values)
     nodes = ["sim_bridge", "impedance_controller"]
-    if composed and sample_every is not None:
+    if robot_loop and sample_every is not None:
+        nodes = ["robot_loop"]
+    elif composed and sample_every is not None:
         nodes = ["sim_bridge", "torque_loop"]
     elif sample_every is not None:
         nodes.insert(1, "wrench_estimator")
@@ -205,7 +212,8 @@ def bench_dds(window: float, sample_every: int | None, preset: str = "ideal",
                 s1, w1 = sim_t(), time.perf_counter()
                 c1 = {n: _tree_cpu_s(p.pid) for n, p in g.procs.items()}
                 st1 = status()
-                timeouts = g.procs["sim_bridge"].output().count("lockstep: no /effort_command")
+                timeouts = g.procs[g.host("sim_bridge")].output().count(
+                    "lockstep: no /effort_command")
                 out = {"rtf": (s1 - s0) / (w1 - w0), "window_s": w1 - w0,
                        "timeouts": timeouts,
                        "stale_estimate_steps": int(st1.stale_estimate_steps
@@ -286,6 +294,10 @@ def main() -> None:
         fig.update({k: v for k, v in r.items() if k != "window_s"})
         fig["lockstep_rtf_separate"] = sep.pop("rtf")
         fig["separate"] = {k: v for k, v in sep.items() if k != "window_s"}
+        # the torque loop inside the simulator's process (0068)
+        rl = bench_dds(window, 1, preset, robot_loop=True)
+        fig["lockstep_rtf_robot_loop"] = rl.pop("rtf")
+        fig["robot_loop"] = {k: v for k, v in rl.items() if k != "window_s"}
         out[preset] = fig
         print(f"{preset}: {fig}", file=sys.stderr)
     out["load_start"] = load0

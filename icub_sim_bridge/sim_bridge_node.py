@@ -43,6 +43,13 @@ Streams other than /clock and /joint_states (FT, IMU, ground truth, cameras) are
 and published while they have subscribers (checked every 100 steps), as Gazebo's lazy
 publishers do.
 
+In-process (``in_process_commands=True``, the composed ``robot_loop`` process,
+:mod:`icub_pmp.nodes.robot_loop`, as gazebo_ros2_control runs the controller manager inside
+the simulator): the node does not subscribe to /effort_command; every step's state is still
+published, then handed to ``state_listener(stamp_ns, joint_states_bytes, {l_arm_ft,
+r_arm_ft: bytes})`` on the physics thread, and commands come back by :meth:`take_effort`
+(same checks, the same lockstep answer).
+
 Threads: the physics loop runs on its own thread and is the only one touching MuJoCo; the
 ``EventsExecutor`` spins on the main thread (``spin_once`` in a loop: the Jazzy wheel's
 ``spin()`` ignores SIGINT): the effort callback validates and hands the command over, service
@@ -104,6 +111,9 @@ __all__ = ["SimBridge", "main"]
 _RUNTIME_PARAMS = {"mode", "real_time_factor", "lockstep_timeout", "clock_decimation",
                    "imu_decimation", "ground_truth_decimation", "start_paused",
                    "command_timeout", "pause_on_divergence"}
+#: the FT sensors whose samples go to an in-process ``state_listener`` (the arm sensors the
+#: wrench estimator reads)
+_IN_PROCESS_FT = ("l_arm_ft", "r_arm_ft")
 _CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
@@ -140,7 +150,9 @@ class _Command:
 class SimBridge(Node):
     """The sim_bridge node (module doc)."""
 
-    def __init__(self) -> None:
+    def __init__(self, in_process_commands: bool = False) -> None:
+        """``in_process_commands``: effort commands come by direct calls
+        (:meth:`take_effort`), not from /effort_command (module doc)."""
         super().__init__("sim_bridge")
         self.params = ConfigParameters(
             self, (SimConfig, RealismConfig),
@@ -208,7 +220,13 @@ class SimBridge(Node):
         self._effort_reader = RawJointStateReader()
         self._effort_names: list[str] | None = None  # names of the last valid command
         self._effort_idx = np.zeros(0, dtype=int)
-        self.create_subscription(JointState, "/effort_command", self._on_effort, sd, raw=True)
+        # in-process (module doc): the composed robot_loop process sets state_listener
+        self.state_listener: Callable[[int, bytes, dict[str, bytes]], None] | None = None
+        self._take_names: list[str] | None = None  # the name list of the last take_effort
+        self._take_idx = np.zeros(0, dtype=int)
+        if not in_process_commands:
+            self.create_subscription(JointState, "/effort_command", self._on_effort, sd,
+                                     raw=True)
         self.create_service(ResetSim, "/sim/reset", self._srv_reset)
         self.create_service(SetObjectPose, "/sim/set_object_pose", self._srv_set_object_pose)
         self.create_service(MoveObject, "/sim/move_object", self._srv_move_object)
@@ -309,6 +327,29 @@ class SimBridge(Node):
             return
         with self._cmd_lock:
             self._pending.append(_Command(stamp_ns, idx, tau))
+        self.watchdog.command()
+        self.lockstep.answer(stamp_ns)
+
+    def take_effort(self, stamp_ns: int, names: list[str], tau: np.ndarray) -> None:
+        """An effort command (torques ``tau`` [N m] of ``names``, answering the state stamped
+        ``stamp_ns`` [ns]) handed over in-process (module doc); checked as /effort_command."""
+        try:
+            if names is not self._take_names:  # a new name list: check and index it once
+                idx = self.sim.indices(list(names))
+                self._take_names, self._take_idx = names, idx
+            tau = np.array(tau, dtype=float)
+            if tau.shape != self._take_idx.shape or not math.isfinite(tau @ tau):
+                raise InvalidInput(f"effort command of {tau.size} values for "
+                                   f"{len(names)} names, or NaN/inf")
+        except IcubPmpError as exc:
+            self._take_names = None
+            self.rejected += 1
+            self.get_logger().warning(f"in-process effort command rejected ({self.rejected} "
+                                      f"so far): {exc}", throttle_duration_sec=1.0)
+            self.lockstep.answer(stamp_ns)
+            return
+        with self._cmd_lock:
+            self._pending.append(_Command(stamp_ns, self._take_idx, tau))
         self.watchdog.command()
         self.lockstep.answer(stamp_ns)
 
@@ -452,10 +493,17 @@ class SimBridge(Node):
             self.pub_clock.publish(self._clock_msg)
         st = sim.joint_state()
         # serialised directly (raw_messages): the names are encoded once, not per message
-        self.pub_js.publish(self._js_writer.write(ns, st.position, st.velocity, st.effort))
+        js = self._js_writer.write(ns, st.position, st.velocity, st.effort)
+        self.pub_js.publish(js)
         ft = sim.ft_all()
+        listener = self.state_listener
+        ft_bytes: dict[str, bytes] = {}
         for k, n in enumerate(FT_SENSORS):
-            if self._active(self.pub_ft[n]):
+            if listener is not None and n in _IN_PROCESS_FT:
+                ft_bytes[n] = self._ft_writers[n].write(ns, ft[k])
+                if self._active(self.pub_ft[n]):
+                    self.pub_ft[n].publish(ft_bytes[n])
+            elif self._active(self.pub_ft[n]):
                 self.pub_ft[n].publish(self._ft_writers[n].write(ns, ft[k]))
         step = sim.steps
         if step % self.config.imu_decimation == 0 and self._active(self.pub_imu):
@@ -494,6 +542,8 @@ class SimBridge(Node):
                 or self._active(self.pub_info["left"]) or self._active(self.pub_info["right"])):
             self._next_cam_ns = ns + self._cam_period_ns
             self.cameras.request(sim.data)
+        if listener is not None:  # in-process (module doc): estimator, controller, command
+            listener(ns, js, ft_bytes)
 
     def _publish_contacts(self, ns: int, m: SelfContacts, found: list, pub: Any) -> None:
         """Publish the contact records ``found`` (Simulator.self_contacts/object_contacts)."""

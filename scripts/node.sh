@@ -2,7 +2,8 @@
 # Start one node with its parameter file: scripts/node.sh NODE [--ros-args EXTRA...]
 # = ros2 run icub_pmp NODE --ros-args --params-file config/NODE.yaml EXTRA...
 # The per-node scripts (scripts/sim_bridge.sh, ...) call this. torque_loop (the
-# wrench_estimator and impedance_controller nodes in one process) reads both their files.
+# wrench_estimator and impedance_controller nodes in one process) reads both their files,
+# robot_loop (sim_bridge and those two) its three.
 set -eo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 NODE="${1:?usage: scripts/node.sh NODE [--ros-args ...]}"; shift
@@ -18,6 +19,7 @@ ARGS=()
 # a composed process reads the parameter file of each node it hosts
 case "$NODE" in
   torque_loop) CONFIGS="wrench_estimator impedance_controller" ;;
+  robot_loop) CONFIGS="sim_bridge wrench_estimator impedance_controller" ;;
   *) CONFIGS="$NODE" ;;
 esac
 for c in $CONFIGS; do

@@ -21,10 +21,9 @@ from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
-from icub_interfaces.msg import ControllerStatus
 from icub_pmp.ros.conversions import arrays_to_trajectory
-from icub_pmp.ros.qos import LATCHED_QOS
 from icub_pmp.testing import NodeGraph, RosProbe, ros_environment, with_realism
+from icub_pmp.testing.controller_status import controller_status, controller_status_after
 
 
 @pytest.fixture(scope="module")
@@ -51,13 +50,6 @@ def probe(graph, ros_domain_id):
         yield p
     finally:
         p.close()
-
-
-def _status(probe: RosProbe) -> ControllerStatus:
-    s = probe.collect("/impedance_controller/status", ControllerStatus, 1, 30.0,
-                      qos=LATCHED_QOS)
-    assert s, "no /impedance_controller/status"
-    return s[0]
 
 
 def _sim_time(probe: RosProbe) -> float:
@@ -101,9 +93,8 @@ def test_every_step_uses_the_estimate_of_its_own_joint_state(graph, probe):
     """Over 0.5 s of simulated time in lockstep, the controller steps once per simulated
     millisecond and no step runs without the estimate of its own joint state (the status
     topic's stale_estimate_steps does not grow), and the torque loop is on."""
-    s0 = _status(probe)
-    _wait_sim(probe, 0.5)
-    s1 = _status(probe)
+    s0 = controller_status(probe)
+    s1 = controller_status_after(probe, s0, 0.5)
     assert s1.steps - s0.steps >= 400, (s0.steps, s1.steps)
     assert s1.stale_estimate_steps == s0.stale_estimate_steps, graph.outputs()[-3000:]
     assert s1.status == "ok", (s1.status, s1.safe_hold_reason)
@@ -136,7 +127,7 @@ def test_stopped_estimator_ends_in_a_said_safe_hold(graph, probe):
     assert res.results[0].successful, res.results[0].reason
     proc = graph.procs["torque_loop"]
     assert proc.wait_for_output("estimator lost", 60.0), proc.output()[-3000:]
-    assert probe.wait_for(lambda: _status(probe).status == "safe_hold", 30.0)
-    assert "estimator lost" in _status(probe).safe_hold_reason
+    assert probe.wait_for(lambda: controller_status(probe).status == "safe_hold", 30.0)
+    assert "estimator lost" in controller_status(probe).safe_hold_reason
     assert not probe.collect("/estimated_joint_torques", JointState, 1, 2.0)
     assert len(probe.collect("/effort_command", JointState, 20, 30.0)) == 20

@@ -5,7 +5,8 @@ Used by the whole-graph integration tests and by the demo. Each node is a
 ``restart(node)`` and ``kill(node)`` act on one node only.
 
 A composed process counts as one node of the list: ``torque_loop`` hosts the
-``wrench_estimator`` and ``impedance_controller`` nodes (:data:`COMPOSED`); the per-node
+``wrench_estimator`` and ``impedance_controller`` nodes, ``robot_loop`` the ``sim_bridge``
+and those two (:data:`COMPOSED`); the per-node
 parameters given under their own names go to them in a parameter file with one section per
 node (a ``-p`` on the command line would set both), and :meth:`host` names the process that
 runs a node.
@@ -27,6 +28,7 @@ __all__ = ["NodeGraph", "COMPOSED"]
 #: processes that host several nodes: process name -> the nodes it runs
 COMPOSED: dict[str, tuple[str, ...]] = {
     "torque_loop": ("wrench_estimator", "impedance_controller"),
+    "robot_loop": ("sim_bridge", "wrench_estimator", "impedance_controller"),
 }
 
 

@@ -47,11 +47,15 @@ In-process inputs (``in_process_inputs=True``, the composed ``torque_loop`` proc
 :mod:`icub_pmp.nodes.torque_loop`): the node does not subscribe to /joint_states and
 /estimated_joint_torques; whoever hosts it hands them over with :meth:`take_joint_state` (the
 message's bytes) and :meth:`take_estimate` (stamp, names, torques), with the same checks and
-the same lockstep gate as the subscriptions. """
+the same lockstep gate as the subscriptions. ``effort_listener`` (set by the composed
+``robot_loop`` process, :mod:`icub_pmp.nodes.robot_loop`) gets every effort command (stamp
+[ns], joint names, torques [N m]) before it is published; :meth:`set_sim_mode` tells the node
+the simulator's stepping mode in-process (as /sim/status does). """
 
 from __future__ import annotations
 
 import time
+from typing import Callable
 
 import numpy as np
 from rclpy.clock import Clock, ClockType
@@ -116,6 +120,8 @@ class ImpedanceControllerNode(Node):
         self._status_wall = 0.0
         self.steps = 0
         self.dropped = 0
+        # in-process output (module doc): the composed robot_loop process sets it
+        self.effort_listener: Callable[[int, list[str], np.ndarray], None] | None = None
 
         sd = qos_profile_sensor_data
         self.pub_effort = self.create_publisher(JointState, "/effort_command", sd)
@@ -220,13 +226,18 @@ class ImpedanceControllerNode(Node):
 
     def _on_sim_status(self, msg: SimStatus) -> None:
         """Follow the simulator's stepping mode (``wait_for_estimate`` acts in lockstep)."""
-        if msg.mode != self._sim_mode:
-            waits = (msg.mode == "lockstep" and self.controller.config.wait_for_estimate
+        self.set_sim_mode(msg.mode)
+
+    def set_sim_mode(self, mode: str) -> None:
+        """The simulator's stepping mode (``lockstep`` or ``free_run``), from /sim/status or
+        in-process."""
+        if mode != self._sim_mode:
+            waits = (mode == "lockstep" and self.controller.config.wait_for_estimate
                      and self.controller.config.torque_loop)
             what = "each joint state waits for its estimate" if waits else \
                 "joint states do not wait for estimates"
-            self.get_logger().info(f"simulator mode {msg.mode!r}: {what}")
-            self._sim_mode = msg.mode
+            self.get_logger().info(f"simulator mode {mode!r}: {what}")
+            self._sim_mode = mode
             if not waits:
                 held = self.gate.expired(-1.0)  # answer a held joint state at once
                 if held is not None:
@@ -380,6 +391,8 @@ class ImpedanceControllerNode(Node):
             return
         self._t_last = t
         self.steps += 1
+        if self.effort_listener is not None:  # in-process: before it is published
+            self.effort_listener(stamp_ns, self.names, out.tau)
         # serialised directly (raw_messages): the names are encoded once
         self.pub_effort.publish(self._effort_writer.write(
             stamp_ns, effort=out.tau))

@@ -43,6 +43,11 @@ In-process listeners (the composed ``torque_loop`` process, :mod:`icub_pmp.nodes
 ``joint_state_listener`` gets the bytes of every /joint_states message on arrival (before the
 estimator looks at it), ``estimate_listener`` gets the joint torques of every processed sample
 (stamp [ns], joint names, torques [N m]) before they are published.
+
+In-process inputs (``in_process_inputs=True``, the composed ``robot_loop`` process,
+:mod:`icub_pmp.nodes.robot_loop`): the node does not subscribe to /joint_states and the arm
+FT topics; the simulator in the same process hands each message's bytes over with
+:meth:`take_joint_state` and :meth:`take_ft`, with the same checks and synchroniser.
 """
 
 from __future__ import annotations
@@ -93,7 +98,9 @@ _FT_KEY = {h: f"/ft/{t}" for h, t in _FT_TOPIC.items()}  # the synchroniser's st
 class WrenchEstimatorNode(Node):
     """The wrench_estimator node (module doc)."""
 
-    def __init__(self) -> None:
+    def __init__(self, in_process_inputs: bool = False) -> None:
+        """``in_process_inputs``: joint states and arm FT wrenches come by direct calls
+        (:meth:`take_joint_state`, :meth:`take_ft`; module doc), not from their topics."""
         super().__init__("wrench_estimator")
         self.params = ConfigParameters(self, WrenchEstimatorConfig,
                                        on_change=self._on_config_change)
@@ -139,11 +146,12 @@ class WrenchEstimatorNode(Node):
 
         # raw subscriptions: the stamp is read from the CDR bytes and only the samples that
         # are processed get deserialised (sample_every > 1 then costs little)
-        self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd,
-                                 raw=True)
-        for h in HANDS:
-            self.create_subscription(WrenchStamped, f"/ft/{_FT_TOPIC[h]}",
-                                     lambda m, h=h: self._on_ft(h, m), sd, raw=True)
+        if not in_process_inputs:
+            self.create_subscription(JointState, "/joint_states", self._on_joint_state, sd,
+                                     raw=True)
+            for h in HANDS:
+                self.create_subscription(WrenchStamped, f"/ft/{_FT_TOPIC[h]}",
+                                         lambda m, h=h: self._on_ft(h, m), sd, raw=True)
         self._imu_sub = None
         self._update_imu_subscription(self.config)
         self.create_service(Trigger, "~/calibrate", self._srv_calibrate)
@@ -240,6 +248,15 @@ class WrenchEstimatorNode(Node):
         self.sync.add(_FT_KEY[hand], ns, w)
         if self.config.require_same_stamp and self.sync.has_primary(ns):
             self._try(ns)
+
+    def take_joint_state(self, data: bytes) -> None:
+        """A /joint_states message (its CDR bytes) handed over in-process (module doc)."""
+        self._on_joint_state(data)
+
+    def take_ft(self, hand: str, data: bytes) -> None:
+        """The /ft/{l,r}_arm_ft message (its CDR bytes) of ``hand`` (left, right) handed over
+        in-process (module doc)."""
+        self._on_ft(hand, data)
 
     def _on_imu(self, msg: Imu) -> None:
         a = msg.linear_acceleration

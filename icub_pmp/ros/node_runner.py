@@ -50,10 +50,11 @@ def spin_node(
 
 
 def spin_nodes(factory: Callable[[], Sequence[Node]], args: list[str] | None = None,
-               name: str = "process") -> None:
+               name: str = "process", worker: Worker | None = None) -> None:
     """As :func:`spin_node` for the nodes ``factory()`` builds, all on one
-    ``EventsExecutor`` (so their callbacks never run at the same time)."""
-    _spin(factory, args, name, None)
+    ``EventsExecutor`` (so their callbacks never run at the same time); ``worker`` runs on
+    the first node (:mod:`icub_pmp.nodes.robot_loop`: the simulator's physics loop)."""
+    _spin(factory, args, name, worker)
 
 
 def _spin(factory: Callable[[], Sequence[Node]], args: list[str] | None, name: str,

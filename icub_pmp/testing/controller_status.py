@@ -1,0 +1,37 @@
+"""The impedance controller's status (/impedance_controller/status) read by a test probe."""
+
+from __future__ import annotations
+
+import time
+
+from icub_interfaces.msg import ControllerStatus
+from icub_pmp.ros.probe import RosProbe
+from icub_pmp.ros.qos import LATCHED_QOS
+
+__all__ = ["controller_status", "controller_status_after"]
+
+
+def controller_status(probe: RosProbe) -> ControllerStatus:
+    """The latest /impedance_controller/status (AssertionError when none within 30 s)."""
+    s = probe.collect("/impedance_controller/status", ControllerStatus, 1, 30.0,
+                      qos=LATCHED_QOS)
+    assert s, "no /impedance_controller/status"
+    return s[0]
+
+
+def _stamp(s: ControllerStatus) -> float:
+    return s.header.stamp.sec + s.header.stamp.nanosec * 1e-9
+
+
+def controller_status_after(probe: RosProbe, s0: ControllerStatus, dt: float,
+                            timeout: float = 120.0) -> ControllerStatus:
+    """The first status stamped ``dt`` s of simulated time after ``s0`` (the status is
+    republished once per wall second: on a fast loop two reads close together are the same
+    message)."""
+    deadline = time.monotonic() + timeout
+    s = controller_status(probe)
+    while _stamp(s) - _stamp(s0) < dt and time.monotonic() < deadline:
+        time.sleep(0.2)
+        s = controller_status(probe)
+    assert _stamp(s) - _stamp(s0) >= dt, f"no status {dt} s after {_stamp(s0):.3f} s"
+    return s
