@@ -7,8 +7,11 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
 1. ``bimanual_reach``: PMP reach of both hands to the sides of the box, torso recruited
    (Mohan et al. 2009, Sect. 3.1): both hands arrive together at tau.
 2. ``bimanual_squeeze`` and ``bimanual_transport``: both hands squeeze the box (the hand frames
-   commanded ``SQUEEZE_OFFSET`` outside its sides, so the palms press a few mm in; the
-   estimator's contact flags confirm both touch) and lift it 8 cm with the object coupling of
+   commanded ``SQUEEZE_OFFSET`` outside its sides, so the palms press a few mm in, with the
+   palms' contact patches above the box's centre of mass, :func:`palm_contact_offsets`; the
+   estimator's contact flags confirm both touch; then a force loop on the estimated contact
+   forces, :func:`hold_squeeze`, sets the squeeze to ``SQUEEZE_FORCE`` and takes off what
+   the arms' weight leaves on the box) and lift it 8 cm with the object coupling of
    Sect. 3.2 (Fig 8): the goal pulls the held box, the box pulls both hands, which keep their
    orientations (``use_orientation``). The planner starts a transport from the controller's
    set-point, so the squeeze is kept rather than released at the start and rebuilt during the
@@ -730,10 +733,10 @@ def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]
 #: the box side at the pre-grasp [m]
 BOX_HALF_WIDTH = 0.10
 PREGRASP_GAP = 0.045
-#: the hand frames' offset outside the box sides at the squeeze [m]: the palms, about 2 cm
-#: from the frames, are commanded a few mm into the box (measured squeeze per hand: 8.3-8.6 N;
-#: 0.008 gave 14-15 N, 0.014 gave 7.5-7.9 N and the box slipped out at the lift, the old
-#: 2 cm inside the sides 66-71 N)
+#: the hand frames' offset outside the box sides at the squeeze's first reach [m]: the palms,
+#: about 2 cm from the frames, are commanded a few mm into the box (measured squeeze per hand
+#: on ideal before the contact patches were aimed: 8.3-8.6 N; 0.008 gave 14-15 N). The force
+#: loop (:func:`hold_squeeze`) then sets the squeeze to SQUEEZE_FORCE from the estimated force
 SQUEEZE_OFFSET = 0.012
 
 #: the squeeze's force loop (:func:`hold_squeeze`): the force of the box on each palm [N]
