@@ -699,6 +699,10 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     return r
 
 
+#: the demo controller's wall-time watchdog on joint states [s] (the shipped config's is 2 s)
+DEMO_STATE_WALL_TIMEOUT = 10.0
+
+
 def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]:
     """The demo's node parameters over their config files: the simulator in lockstep with the
     controller, every other node on simulated time; ``realism`` sets the simulator's
@@ -710,7 +714,11 @@ def graph_parameters(realism: str | None = None) -> dict[str, dict[str, object]]
                               **preset.get("sim_bridge", {})}
     # stiff position tracking for the reaches (the compliant mode is the controller's
     # default; config/impedance_controller.yaml)
+    # state_wall_timeout: the lockstep simulator may stall for more than the shipped 2 s of
+    # wall time on a loaded machine (cameras rendering beside the solvers): a run at load 9-13
+    # went to safe hold in the Cartesian reach (0066); 10 s still finds a simulator gone
     controller: dict[str, object] = {"lockstep": True, "use_sim_time": True, "mode": "position",
+                                     "state_wall_timeout": DEMO_STATE_WALL_TIMEOUT,
                                      **preset.get("impedance_controller", {})}
     segmenter: dict[str, object] = {"use_sim_time": True, **preset.get("motion_segmenter", {})}
     return {
