@@ -17,7 +17,7 @@ NODES = {
     "pmp_planner": f"{PACKAGE}.nodes.pmp_planner",
     "posture_publisher": f"{PACKAGE}.nodes.posture_publisher",
     "robot_state_publisher": f"{PACKAGE}.nodes.robot_state_publisher",
-    "robot_loop": f"{PACKAGE}.nodes.robot_loop",
+    "robot_loop": "icub_sim_bridge.robot_loop_node",
     "sim_bridge": "icub_sim_bridge.sim_bridge_node",
     "torque_loop": f"{PACKAGE}.nodes.torque_loop",
     "wrench_estimator": f"{PACKAGE}.nodes.wrench_estimator",

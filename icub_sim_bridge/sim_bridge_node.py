@@ -44,7 +44,7 @@ and published while they have subscribers (checked every 100 steps), as Gazebo's
 publishers do.
 
 In-process (``in_process_commands=True``, the composed ``robot_loop`` process,
-:mod:`icub_pmp.nodes.robot_loop`, as gazebo_ros2_control runs the controller manager inside
+:mod:`icub_sim_bridge.robot_loop_node`, as gazebo_ros2_control runs the controller manager inside
 the simulator): the node does not subscribe to /effort_command; every step's state is still
 published, then handed to ``state_listener(stamp_ns, joint_states_bytes, {l_arm_ft,
 r_arm_ft: bytes})`` on the physics thread, and commands come back by :meth:`take_effort`

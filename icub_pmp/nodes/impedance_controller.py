@@ -48,7 +48,7 @@ In-process inputs (``in_process_inputs=True``, the composed ``torque_loop`` proc
 /estimated_joint_torques; whoever hosts it hands them over with :meth:`take_joint_state` (the
 message's bytes) and :meth:`take_estimate` (stamp, names, torques), with the same checks and
 the same lockstep gate as the subscriptions. ``effort_listener`` (set by the composed
-``robot_loop`` process, :mod:`icub_pmp.nodes.robot_loop`) gets every effort command (stamp
+``robot_loop`` process, :mod:`icub_sim_bridge.robot_loop_node`) gets every effort command (stamp
 [ns], joint names, torques [N m]) before it is published; :meth:`set_sim_mode` tells the node
 the simulator's stepping mode in-process (as /sim/status does). """
 

@@ -45,7 +45,7 @@ estimator looks at it), ``estimate_listener`` gets the joint torques of every pr
 (stamp [ns], joint names, torques [N m]) before they are published.
 
 In-process inputs (``in_process_inputs=True``, the composed ``robot_loop`` process,
-:mod:`icub_pmp.nodes.robot_loop`): the node does not subscribe to /joint_states and the arm
+:mod:`icub_sim_bridge.robot_loop_node`): the node does not subscribe to /joint_states and the arm
 FT topics; the simulator in the same process hands each message's bytes over with
 :meth:`take_joint_state` and :meth:`take_ft`, with the same checks and synchroniser.
 """

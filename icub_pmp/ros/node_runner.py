@@ -53,7 +53,7 @@ def spin_nodes(factory: Callable[[], Sequence[Node]], args: list[str] | None = N
                name: str = "process", worker: Worker | None = None) -> None:
     """As :func:`spin_node` for the nodes ``factory()`` builds, all on one
     ``EventsExecutor`` (so their callbacks never run at the same time); ``worker`` runs on
-    the first node (:mod:`icub_pmp.nodes.robot_loop`: the simulator's physics loop)."""
+    the first node (:mod:`icub_sim_bridge.robot_loop_node`: the simulator's physics loop)."""
     _spin(factory, args, name, worker)
 
 
