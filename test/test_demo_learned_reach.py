@@ -39,16 +39,18 @@ def _run_graph(*args: str, timeout: float = 2400.0) -> tuple[int | None, str]:
 
 
 def test_learned_and_analytic_reach_the_target_and_the_seen_object(tmp_path):
-    """1,500 pinocchio babbles, 8 s of CPU of training. On the fixed target the learned
+    """3,000 pinocchio babbles, 16 s of CPU of training. On the fixed target the learned
     planner's true hand ends within 1 cm in the physics, the analytic one within 5 mm. The
     cylinder moved across the table is seen still by the stereo segmenter, and both planners
     take the true hand within 2 cm of the point above the cylinder's true top (not the
     estimate's), the estimate within 1 cm of it; the summary holds both, and the learned model
     file it planned with."""
     out = tmp_path / "run"
+    # 1,500 babbles and 8 s gave the learned hand 10.2 mm off in a check run (2026-12-04, load
+    # 7-9): the bound is the model's, so the model gets the data and time to meet it.
     # the ideal robot: on the shipped icub one (friction, mass mismatch, 12-bit encoders) the
     # learned planner of this small model ended 16 mm off in a CI run (issue 17's note)
-    rc, output = _run_graph("--babbles", "1500", "--budget", "8", "--targets", "1",
+    rc, output = _run_graph("--babbles", "3000", "--budget", "16", "--targets", "1",
                             "--objects", "1", "--realism", "ideal", "--out", str(out))
     assert rc == 0, output[-6000:]
     s = json.loads((out / "summary.json").read_text())
