@@ -7,13 +7,11 @@ state, and the robot reaches a target."""
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
 from geometry_msgs.msg import WrenchStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from trajectory_msgs.msg import JointTrajectory
@@ -23,6 +21,7 @@ from icub_pmp.ros.conversions import arrays_to_trajectory
 from icub_pmp.ros.qos import LATCHED_QOS
 from icub_pmp.testing import NodeGraph, RosProbe, ros_environment, with_realism
 from icub_pmp.testing.controller_status import controller_status, controller_status_after
+from icub_pmp.testing.sim_clock import wait_sim
 
 
 @pytest.fixture(scope="module")
@@ -47,21 +46,6 @@ def probe(graph, ros_domain_id):
         yield p
     finally:
         p.close()
-
-
-def _sim_time(probe: RosProbe) -> float:
-    c = probe.collect("/clock", Clock, 1, 30.0)
-    assert c, "no /clock within 30 s"
-    return c[0].clock.sec + c[0].clock.nanosec * 1e-9
-
-
-def _wait_sim(probe: RosProbe, dt: float, timeout: float = 120.0) -> None:
-    t0 = t = _sim_time(probe)
-    deadline = time.monotonic() + timeout
-    while t - t0 < dt and time.monotonic() < deadline:
-        time.sleep(0.2)
-        t = _sim_time(probe)
-    assert t - t0 >= dt, f"simulated time advanced only {t - t0:.3f} s in {timeout} s"
 
 
 def test_one_process_serves_the_three_nodes_and_their_topics(graph, probe):
@@ -114,7 +98,7 @@ def test_reaches_a_target_on_the_icub_preset(graph, probe):
     js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
     target = dict(zip(js.name, js.position))["r_elbow"] + 0.3
     pub.publish(arrays_to_trajectory(["r_elbow"], [0.5], np.array([[target]])))
-    _wait_sim(probe, 1.0)
+    wait_sim(probe, 1.0)
     js = probe.collect("/joint_states", JointState, 1, 20.0)[0]
     q = dict(zip(js.name, js.position))["r_elbow"]
     assert abs(math.degrees(q - target)) < 0.5, math.degrees(q - target)
