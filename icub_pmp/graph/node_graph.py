@@ -102,6 +102,7 @@ class NodeGraph:
     def restart(self, node: str) -> NodeProcess:
         """Stop ``node`` if alive, then start it again."""
         self.procs[node].stop()
+        self.procs[node].close_log()
         return self.start(node)
 
     def alive(self) -> dict[str, bool]:
@@ -116,6 +117,7 @@ class NodeGraph:
         """Stop every node this graph started (reverse order)."""
         for p in reversed(list(self.procs.values())):
             p.stop()
+            p.close_log()
         for name in self._files:
             Path(name).unlink(missing_ok=True)
         self._files.clear()

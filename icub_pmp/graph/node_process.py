@@ -20,9 +20,10 @@ __all__ = ["NodeProcess", "param_text"]
 class NodeProcess:
     """Run ``scripts/run_node.sh NODE ARGS`` (or any command) in its own process group.
 
-    Output goes to a temporary log file (:meth:`output`). :meth:`stop` sends SIGINT to the
-    group this object started, then SIGKILL after ``timeout``; it never touches other
-    processes. Usable as a context manager.
+    Output goes to a temporary log file (:meth:`output`), removed by :meth:`close_log` (and on
+    leaving the context) unless ``ICUB_PMP_KEEP_NODE_LOGS`` is set (then its path is kept for
+    reading after the run). :meth:`stop` sends SIGINT to the group this object started, then
+    SIGKILL after ``timeout``; it never touches other processes. Usable as a context manager.
     """
 
     def __init__(
@@ -51,6 +52,7 @@ class NodeProcess:
         self._log = tempfile.NamedTemporaryFile(
             prefix=f"{self.name}-", suffix=".log", delete=False
         )
+        self._closed_output: str | None = None
         self.proc = subprocess.Popen(
             self.command,
             stdout=self._log,
@@ -70,9 +72,29 @@ class NodeProcess:
         return self.proc.poll() is None
 
     def output(self) -> str:
-        """Everything the process printed so far."""
+        """Everything the process printed so far (after :meth:`close_log`: all it printed)."""
+        if self._closed_output is not None:
+            return self._closed_output
         self._log.flush()
         return Path(self._log.name).read_text(errors="replace")
+
+    @property
+    def log_path(self) -> str:
+        """The log file's path."""
+        return self._log.name
+
+    def close_log(self) -> None:
+        """Keep the output in memory and remove the log file (a stopped process's; kept when
+        ``ICUB_PMP_KEEP_NODE_LOGS`` is set): benchmarks and tests start hundreds of nodes."""
+        if self._closed_output is not None or self.alive():
+            return
+        self._closed_output = self.output()
+        self._log.close()
+        if not os.environ.get("ICUB_PMP_KEEP_NODE_LOGS"):
+            try:
+                os.unlink(self._log.name)
+            except OSError:
+                pass
 
     def signal(self, sig: int) -> None:
         """Send ``sig`` to the process group this object started (if still running)."""
@@ -117,10 +139,7 @@ class NodeProcess:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
-        try:
-            os.unlink(self._log.name)
-        except OSError:
-            pass
+        self.close_log()
 
 
 def param_text(v: object) -> str:

@@ -299,6 +299,13 @@ class MotionSegmenterNode(Node):
         except IcubPmpError as exc:
             self.get_logger().warn(f"no 3-D target: {exc}", throttle_duration_sec=5.0)
             return
+        if res.measurement is None and (res.note or len(left[2].blobs) or len(right[2].blobs)):
+            # why moving blobs gave no measurement (unpaired, refused as the robot's own arm,
+            # another object, no object in the region): `--log-level motion_segmenter:=debug`
+            self.get_logger().debug(
+                f"t={left[0]:.3f}: blobs {len(left[2].blobs)}/{len(right[2].blobs)}, "
+                f"pairs {len(res.pairs)}, target {'held' if res.target.valid else 'none'}: "
+                f"{res.note or 'nothing measured'}")
         if res.target.valid:
             self._publish(res.target, res.source, 0 if res.measurement is None
                           else res.measurement.n_points)

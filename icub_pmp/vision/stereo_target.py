@@ -97,6 +97,10 @@ class StereoTarget:
         pairs = self.pairing.pair(blobs_left, blobs_right, rect)
         target = self.tracker.target
         notes = []
+        if not pairs and blobs_left.blobs and blobs_right.blobs:
+            # why the largest blobs of the two eyes are not one object (for the node's log)
+            notes.append("largest blobs unpaired: " + self.pairing.check(
+                blobs_left.blobs[0], blobs_right.blobs[0], rect))
         meas: ObjectEstimate | None = None
         other: ObjectEstimate | None = None  # another object seen moving, far from the target
         source = "none"
