@@ -10,8 +10,8 @@ segmenter with its stereo target, the gaze controller). Each trial (random place
 motions, ``--seed`` 23 by default, not the tests' or the demo's; ``--only K`` runs trial K
 alone): the head looks at the table where the cylinder will move and then tracks the stereo
 target; the cylinder is placed, moved at a constant speed (0.1-0.25 m/s, any direction on
-the table, 0.6-1.2 s) and stops; once the target is still, the right hand reaches the
-pre-grasp point 6 cm above the estimated top centre
+the table, 0.6-1.2 s) and stops; once the target is still, the hand on the object's side
+(``scenario.reaching_arm``) reaches the pre-grasp point 6 cm above the estimated top centre
 (``icub_pmp.demo.scenario.vision_reach``, the demo's phase 3), then goes back. Each trial
 prints the target's history (taken, switched, dropped, the goal) with the thing nearest to
 each position: the cylinder, the box, a segment of the robot's arms, the table's edge.
@@ -74,7 +74,10 @@ def graph_params(realism: str | None, eye_hand_map: str = "") -> dict[str, dict[
 
 
 PARAMS = graph_params(None)
+#: where the hands wait between trials [m, root_link]: above the table's near corners, out of
+#: the way of the objects and of the other hand's reach
 HOME = np.array([-0.22, 0.25, 0.12])
+HOME_LEFT = np.array([-0.22, -0.25, 0.12])
 
 
 def trials(n: int, seed: int = 23) -> list[tuple[np.ndarray, np.ndarray, float]]:
@@ -203,8 +206,9 @@ def run(n: int, realism: str | None = None, eye_hand_map: str = "", seed: int = 
                 for k, (start, vel, dur) in enumerate(trials(n, seed)):
                     if only is not None and k not in only:
                         continue
-                    runner.pmp_reach("home", {"right": HOME}, use_torso=True, tau=1.0,
-                                     judge_physics=False)
+                    runner.pmp_reach("home", {"right": HOME, "left": HOME_LEFT},
+                                     use_torso=True, tau=1.0, judge_physics=False)
+                    q0 = dict(zip(runner.model.joint_names, runner.q()))
                     r = vision_reach(runner, start, vel, dur, name=f"trial{k}")
                     for m in list(runner.estimates):
                         t = time_to_sec(m.header.stamp)
@@ -221,6 +225,9 @@ def run(n: int, realism: str | None = None, eye_hand_map: str = "", seed: int = 
                         s2g.append(r.extra["goal_sent_s"] - dur)
                     print(f"trial {k}: {'ok' if r.success else 'FAILED'} {r.message} "
                           f"{ {a: round(b, 4) for a, b in r.extra.items()} }", flush=True)
+                    print("  torso at the start [deg]: " + " ".join(
+                        f"{j}={math.degrees(q0[j]):.1f}" for j in runner.model.spec.torso_joints),
+                        flush=True)
                     print("  target: " + " | ".join(target_events(runner, joints, r)),
                           flush=True)
                     if not r.success:

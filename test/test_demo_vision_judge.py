@@ -102,3 +102,13 @@ def test_a_still_pair_of_partial_measurements_is_not_the_goal():
     assert m is seq[7], (m.header.stamp, m.points)
     # with every measurement whole, the first still pair is the goal
     assert settled_still_estimate(seq[3:], after=1.10) is seq[4]
+
+
+def test_reaching_arm_is_the_one_on_the_objects_side() -> None:
+    """An object left of the midline is reached with the left hand (a right hand reaching
+    across the body passed over the resting left one and ended 2.1 cm off, seed 29 trial 19)."""
+    from icub_pmp.demo.scenario import reaching_arm
+
+    assert reaching_arm(np.array([-0.34, -0.13, -0.02])) == "left"
+    assert reaching_arm(np.array([-0.34, 0.10, -0.02])) == "right"
+    assert reaching_arm(np.array([-0.34, 0.0, -0.02])) == "right"

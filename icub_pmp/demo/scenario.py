@@ -422,13 +422,28 @@ def wait_still_target(runner: DemoRunner, after: float, timeout: float = 3.0):  
     return found()
 
 
+#: the body's midline in root_link (y = 0) splits the table between the arms: an object on
+#: the left of it (y < 0) is reached with the left hand, else with the right (the arm on the
+#: object's side, as the iCub's reaching demos choose it, docs/decisions/0058 rule 13)
+REACHING_ARM_SPLIT_Y = 0.0
+
+
+def reaching_arm(top: np.ndarray) -> str:
+    """The hand that reaches an object whose top centre is at ``top`` (3,) [m, root_link]:
+    ``left`` for an object left of the body's midline (``y < REACHING_ARM_SPLIT_Y``), else
+    ``right``: a hand reaching across the body passes over the other, resting hand."""
+    return "left" if float(top[1]) < REACHING_ARM_SPLIT_Y else "right"
+
+
 def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, duration: float,
-                 bias: np.ndarray | None = None, name: str = "vision_reach") -> PhaseResult:
+                 bias: np.ndarray | None = None, name: str = "vision_reach",
+                 arm: str | None = None) -> PhaseResult:
     """Phase 3: move the cylinder from ``start`` [m] at ``velocity`` [m/s] for ``duration``
     [s] while the head tracks the stereo target; once the target is still, reach the
-    pre-grasp point above its top with the right hand (via a point above when needed) and
-    judge against the ground truth (:func:`judge_vision_reach`). ``bias`` (3,) [m] is added to
-    the estimate before the reach (tests prove with it that the judge can fail)."""
+    pre-grasp point above its top with the hand on its side (:func:`reaching_arm`; ``arm``
+    forces one), via a point above when needed, and judge against the ground truth
+    (:func:`judge_vision_reach`). ``bias`` (3,) [m] is added to the estimate before the reach
+    (tests prove with it that the judge can fail)."""
     from icub_pmp.pmp.pre_grasp import PreGrasp
 
     pre = PreGrasp()
@@ -456,19 +471,20 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     target_error = float(np.linalg.norm(position - runner.object_position_at("cylinder", stamp)))
     if bias is not None:
         top = top + np.asarray(bias, float)
-    hand = runner.hand_positions()["right"]
+    arm = arm or reaching_arm(top)
+    hand = runner.hand_positions()[arm]
     points = pre.waypoints(hand, top, est.radius, est.height)
     object_before = runner.object_position("cylinder")
     goal_sent = runner.sim_time() - t0
     for k, p in enumerate(points[:-1]):
-        runner.pmp_reach(f"{name}_via{k}", {"right": p}, use_torso=True, tau=1.5,
+        runner.pmp_reach(f"{name}_via{k}", {arm: p}, use_torso=True, tau=1.5,
                          judge_physics=False)
-    vr = runner.pmp_reach(name, {"right": points[-1]}, use_torso=True, tau=1.5,
+    vr = runner.pmp_reach(name, {arm: points[-1]}, use_torso=True, tau=1.5,
                           judge_physics=False)
     runner.set_tracking(False)
     truth = runner.object_position("cylinder")
     ok, message, figures = judge_vision_reach(
-        runner.hand_positions()["right"], truth, cylinder_height(), pre.config.clearance,
+        runner.hand_positions()[arm], truth, cylinder_height(), pre.config.clearance,
         target_error, float(np.linalg.norm(truth - object_before)))
     cov = np.array(est.covariance).reshape(3, 3)
     vr.extra.update(figures)
@@ -479,9 +495,10 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
         "via_points": float(len(points) - 1),
         "goal_sent_s": goal_sent,
         "motion_s": t_end - t0,
+        "left_arm": float(arm == "left"),
     })
     vr.success = bool(vr.success and ok)
-    vr.message = f"{message} ({vr.message})"
+    vr.message = f"{arm} hand: {message} ({vr.message})"
     vr.sim_start = t0
     return vr
 
