@@ -1,0 +1,85 @@
+"""The press's force loop (icub_pmp.control.press_loop): a bad secant does not spoil the
+compliance, a diverged press is not built on, the step is capped, and the loop converges on a
+contact that is softer than the model and noisy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from icub_pmp.control.press_loop import PressLoop, PressLoopConfig, robust_secant_update
+from icub_pmp.errors import InvalidInput
+
+F = np.array([0.0, 0.0, -10.0])
+MODEL = np.diag([0.0008, 0.0008, 0.0011])
+
+
+def test_a_secant_that_disagrees_with_the_model_is_rejected():
+    """A press that moved the target 2 mm down and changed the force by 0.5 N (the fingertips
+    slipped: 4 mm/N, 3.6 x the model) or raised it while the target went up (sign) keeps the
+    compliance; one at 1.5 x the model is fitted exactly."""
+    dx = np.array([0.0, 0.0, -0.002])
+    C, ok = robust_secant_update(MODEL, MODEL, dx, np.array([0.0, 0.0, -0.5]))
+    assert not ok and C is MODEL
+    C, ok = robust_secant_update(MODEL, MODEL, -dx, np.array([0.0, 0.0, -1.2]))
+    assert not ok and C is MODEL
+    dF = dx / (1.5 * 0.0011)
+    C, ok = robust_secant_update(MODEL, MODEL, dx, dF)
+    assert ok and np.allclose(C @ dF, dx)
+    C, ok = robust_secant_update(MODEL, MODEL, dx, np.array([0.0, 0.0, -0.1]))
+    assert not ok  # too small a change to tell
+
+
+def test_a_diverged_press_is_not_built_on_and_the_best_is_kept():
+    """After a press within 6 % and one nearly lifted off (95 %), the next target is a
+    correction of the good press, not of the lifted one; ``best`` is the good press."""
+    loop = PressLoop(F, MODEL)
+    loop.record([0.0, 0.0, -0.010], [0.0, 0.2, -9.4])
+    good = loop.presses[0]
+    loop._base = 0
+    loop.record([0.0, 0.0, -0.0095], [0.0, 0.1, -0.5])
+    assert loop.best is good and not loop.done
+    nxt = loop.next_target()
+    expected = good.target + loop.compliance @ (F - good.exerted)
+    assert np.allclose(nxt, expected)
+    assert np.linalg.norm(nxt - good.target) < 0.001
+
+
+def test_one_correction_moves_the_target_at_most_max_step():
+    loop = PressLoop(F, MODEL, PressLoopConfig(max_step=0.002))
+    loop.record(np.zeros(3), np.zeros(3))  # no contact yet: 10 N x 1.1 mm/N = 11 mm wanted
+    step = loop.next_target()
+    assert np.isclose(np.linalg.norm(step), 0.002)
+    assert step[2] < 0
+
+
+def test_the_loop_converges_on_a_softer_noisy_contact():
+    """A contact twice as compliant as the model down, with a sideways friction force that
+    grows with the press and 0.2 N of noise: within 8 presses the force is within 4 %."""
+    rng = np.random.default_rng(3)
+    true_c = np.array([[0.0016, 0.0, 0.0], [0.0, 0.0016, 0.0004], [0.0, 0.0, 0.0022]])
+    contact = np.array([-0.3, 0.15, -0.05])
+
+    def plant(target: np.ndarray) -> np.ndarray:
+        f = np.linalg.solve(true_c, target - contact)
+        return (f if f[2] < 0 else np.zeros(3)) + rng.normal(0.0, 0.2, 3)
+
+    loop = PressLoop(F, MODEL)
+    target = contact + MODEL @ F
+    for _ in range(8):
+        loop.record(target, plant(target))
+        if loop.done:
+            break
+        target = loop.next_target()
+    assert loop.done, [round(p.error, 3) for p in loop.presses]
+
+
+def test_bad_input_is_a_clear_error():
+    with pytest.raises(InvalidInput, match="force"):
+        PressLoop(np.zeros(3), MODEL)
+    with pytest.raises(InvalidInput, match="compliance"):
+        PressLoop(F, np.full((3, 3), np.nan))
+    with pytest.raises(InvalidInput, match="max_step"):
+        PressLoopConfig(max_step=-1.0)
+    with pytest.raises(InvalidInput, match="no press"):
+        PressLoop(F, MODEL).next_target()
