@@ -34,9 +34,10 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
    moved.
 6. ``press``: the right hand presses down on the table top with 10 N: the position-mode joint
    springs realise a force through a target beyond the contact (``x_contact + C F``, the
-   hand's compliance ``C = J K^-1 J^T``), corrected from the wrench estimator's force with a
-   compliance fitted to the measured force changes (Broyden); the goals carry the force
-   target (``right_force``). Judged by :func:`judge_press`: the estimated
+   fingertips' compliance ``C = J_c K^-1 J_c^T``, the hand's orientation kept), corrected
+   from the wrench estimator's force by a guarded force loop that fits the compliance to the
+   measured force changes (:class:`~icub_pmp.control.press_loop.PressLoop`); the goals carry
+   the force target (``right_force``). Judged by :func:`judge_press`: the estimated
    external force within 10 % of the target, reported beside the simulator's contact force.
 
 7. ``tabletop`` (with ``--tabletop``): the two arms' tabletop task of issue 19
