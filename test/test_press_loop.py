@@ -31,13 +31,14 @@ def test_a_secant_that_disagrees_with_the_model_is_rejected():
 
 
 def test_a_diverged_press_is_not_built_on_and_the_best_is_kept():
-    """After a press within 6 % and one nearly lifted off (95 %), the next target is a
-    correction of the good press, not of the lifted one; ``best`` is the good press."""
+    """After a press within 6 % and one nearly lifted off (95 %: the target went down, the
+    force fell), the secant between them is rejected, and the next target is a correction of
+    the good press, not of the lifted one; ``best`` is the good press."""
     loop = PressLoop(F, MODEL)
     loop.record([0.0, 0.0, -0.010], [0.0, 0.2, -9.4])
     good = loop.presses[0]
-    loop._base = 0
-    loop.record([0.0, 0.0, -0.0095], [0.0, 0.1, -0.5])
+    lifted = loop.record(loop.next_target(), [0.0, 0.1, -0.5])
+    assert not lifted.secant_accepted and np.array_equal(loop.compliance, MODEL)
     assert loop.best is good and not loop.done
     nxt = loop.next_target()
     expected = good.target + loop.compliance @ (F - good.exerted)
