@@ -84,3 +84,42 @@ def test_bad_input_is_a_clear_error():
         PressLoopConfig(max_step=-1.0)
     with pytest.raises(InvalidInput, match="no press"):
         PressLoop(F, MODEL).next_target()
+
+
+def test_contact_compliance_predicts_how_far_the_fingertips_and_the_frame_yield():
+    """A force at the fingertips (the hull's lowest point, 5-6 cm from the hand frame) bends
+    the joint springs by ``K^-1 J_c^T F``: forward kinematics of the bent posture moves the
+    fingertips by the kept-orientation compliance (``J_c K^-1 J_c^T``) and the hand frame by
+    the free one (``J_h K^-1 J_c^T``); down, the fingertips yield more than the frame."""
+    from icub_pmp.demo import scenario
+    from icub_pmp.kinematics import IcubModel
+
+    model = IcubModel()
+    spec = model.spec
+    joints = list(spec.torso_joints) + list(spec.arm_joints("right"))
+    stiffness = scenario.joint_stiffness(joints)
+    frame = spec.hand_frame("right")
+    q = model.posture("rest")
+    c = scenario.hand_contact_point(model, q)
+    pose = model.frame_pose(q, frame)
+    local = np.asarray(pose.rotation).T @ (c - np.asarray(pose.translation))
+    assert 0.03 < np.linalg.norm(local) < 0.12
+    kept = scenario.contact_compliance(model, q, frame, c, stiffness, keep_orientation=True)
+    free = scenario.contact_compliance(model, q, frame, c, stiffness)
+    assert np.allclose(kept, kept.T) and np.all(np.linalg.eigvalsh(kept) > 0)
+    idx = model.indices(joints)
+    k = np.array([stiffness[j] for j in joints])
+    J = model.frame_jacobian(q, frame)[:, idx]
+    skew = np.array([[0, -c[2] + pose.translation[2], c[1] - pose.translation[1]],
+                     [c[2] - pose.translation[2], 0, -c[0] + pose.translation[0]],
+                     [-c[1] + pose.translation[1], c[0] - pose.translation[0], 0]])
+    Jc = J[:3] - skew @ J[3:]
+    F = np.array([0.0, 0.0, 0.5])  # the table pushes the fingertips up by 0.5 N
+    dq = np.zeros_like(q)
+    dq[idx] = (Jc.T @ F) / k
+    bent = model.frame_pose(q + dq, frame)
+    tip_moved = np.asarray(bent.rotation) @ local + np.asarray(bent.translation) - c
+    frame_moved = np.asarray(bent.translation) - np.asarray(pose.translation)
+    assert np.linalg.norm(tip_moved - kept @ F) < 0.05 * np.linalg.norm(tip_moved)
+    assert np.linalg.norm(frame_moved - free @ F) < 0.05 * np.linalg.norm(frame_moved)
+    assert kept[2, 2] > free[2, 2] > 0
