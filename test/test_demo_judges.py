@@ -12,7 +12,6 @@ from icub_pmp.demo.scenario import (
     judge_obstacle_reach,
     judge_press,
     judge_transport,
-    press_compliance_update,
 )
 
 
@@ -65,19 +64,3 @@ def test_press_is_judged_on_the_estimate_against_the_target_force():
     assert not ok
     ok, msg, _ = judge_press(np.array([0.0, 0.0, 10.0]), np.zeros(3), None)
     assert not ok and "no valid target force" in msg
-
-
-def test_press_compliance_update_fits_the_measured_force_changes():
-    """Broyden's update: after a press that moved the target 2.4 mm down and raised the
-    downward force by 1.2 N and pushed 0.3 N sideways, the compliance maps that force change
-    to that motion exactly (2 mm/N down where the model said 1); a force change too small to
-    tell, or one that would make the compliance non-positive, keeps the model."""
-    C = np.eye(3) * 0.001
-    dx = np.array([0.0, 0.0, -0.0024])
-    dF = np.array([0.0, 0.3, -1.2])
-    new = press_compliance_update(C, dx, dF)
-    assert np.allclose(new @ dF, dx)
-    assert float(dF @ new @ dF) > 0.0
-    assert np.allclose(new @ np.array([1.0, 0.0, 0.0]), C @ np.array([1.0, 0.0, 0.0]))
-    assert press_compliance_update(C, dx, np.array([0.0, 0.0, -0.2])) is C
-    assert press_compliance_update(C, -10 * dx, dF) is C

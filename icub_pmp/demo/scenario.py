@@ -34,9 +34,10 @@ controller, so the 1 kHz loop is exact in simulated time), records every topic t
    moved.
 6. ``press``: the right hand presses down on the table top with 10 N: the position-mode joint
    springs realise a force through a target beyond the contact (``x_contact + C F``, the
-   hand's compliance ``C = J K^-1 J^T``), corrected from the wrench estimator's force with a
-   compliance fitted to the measured force changes (Broyden); the goals carry the force
-   target (``right_force``). Judged by :func:`judge_press`: the estimated
+   fingertips' compliance ``C = J_c K^-1 J_c^T``, the hand's orientation kept), corrected
+   from the wrench estimator's force by a guarded force loop that fits the compliance to the
+   measured force changes (:class:`~icub_pmp.control.press_loop.PressLoop`); the goals carry
+   the force target (``right_force``). Judged by :func:`judge_press`: the estimated
    external force within 10 % of the target, reported beside the simulator's contact force.
 
 7. ``tabletop`` (with ``--tabletop``): the two arms' tabletop task of issue 19
@@ -586,26 +587,13 @@ PRESS_FORCE = np.array([0.0, 0.0, -10.0])
 #: is within PRESS_STOP_TOLERANCE of the target (below the judged PRESS_FORCE_TOLERANCE)
 PRESS_MAX_ITERATIONS = 8
 PRESS_STOP_TOLERANCE = 0.04
+#: the largest move of the press target in one correction [m] (about 4 N at the fingertips)
+PRESS_MAX_STEP = 0.004
+#: each press's force: settle, then average the estimate over this [s of simulated time]
+PRESS_SETTLE = 0.3
+PRESS_AVERAGE = 0.3
 #: where the cylinder waits during the press (far corner of the table) [m, root_link]
 PRESS_CYLINDER_AWAY = np.array([-0.56, 0.38, -0.03])
-
-
-def press_compliance_update(C: np.ndarray, dx: np.ndarray, dF: np.ndarray,
-                            min_change: float = 0.3) -> np.ndarray:
-    """Broyden's update of the press compliance ``C`` (3, 3) [m/N] from one more press: the
-    target moved by ``dx`` (3,) [m] and the force the hand exerts changed by ``dF`` (3,) [N];
-    the updated matrix maps ``dF`` to ``dx`` exactly and is unchanged across ``dF``. Kept as
-    it is when the force changed by less than ``min_change`` [N] (too little to tell) or when
-    the update would make the compliance along ``dF`` non-positive (a contact that slipped)."""
-    C = np.asarray(C, float)
-    dx, dF = np.asarray(dx, float), np.asarray(dF, float)
-    n2 = float(dF @ dF)
-    if not np.all(np.isfinite(dx)) or not np.all(np.isfinite(dF)) or n2 < min_change**2:
-        return C
-    new = C + np.outer(dx - C @ dF, dF) / n2
-    if not float(dF @ new @ dF) > 0.0:
-        return C
-    return new
 
 
 def hand_contact_point(model: IcubModel, q: np.ndarray, link: str = "r_hand") -> np.ndarray:
@@ -635,17 +623,53 @@ def _hand_hulls() -> dict:
 
 
 def contact_compliance(model: IcubModel, q: np.ndarray, frame: str, contact: np.ndarray,
-                       joint_stiffness: dict[str, float]) -> np.ndarray:
+                       joint_stiffness: dict[str, float], keep_orientation: bool = False
+                       ) -> np.ndarray:
     """``C = J_h K^-1 J_c^T`` (3, 3) [m/N]: how far the set-point of ``frame``'s origin must go
     beyond its measured position for the joint springs to push with a force at ``contact``
-    (3,) [m] on the same link (``J_c = J_v - [c - x_h]x J_w``)."""
+    (3,) [m] on the same link (``J_c = J_v - [c - x_h]x J_w``), the set-point's orientation
+    free. With ``keep_orientation`` the set-point keeps the orientation the hand had before
+    the load, while the loaded hand turns about the pinned contact by ``J_w K^-1 J_c^T F``,
+    which moves the frame by ``[x_h - c]x`` that: ``C = J_c K^-1 J_c^T`` (the contact
+    point's own compliance; docs/decisions/0069)."""
     names = list(joint_stiffness)
     k = np.array([joint_stiffness[n] for n in names], dtype=float)
     J = model.frame_jacobian(q, frame)[:, model.indices(names)]
     r = np.asarray(contact, float) - model.frame_position(q, frame)
     skew = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
     Jc = J[:3] - skew @ J[3:]
-    return (J[:3] / k) @ Jc.T
+    return ((Jc if keep_orientation else J[:3]) / k) @ Jc.T
+
+
+def _log_press(runner: DemoRunner, label: str, target: np.ndarray, exerted: np.ndarray
+               ) -> None:
+    """Print one press's figures: the hand frame's target, the force exerted as estimated
+    and as the simulator's contact force, the hand frame and the fingertip (hull's lowest
+    point) measured, the torso [deg]."""
+    q = runner.q()
+    gt = runner.latest.get("gt_right")
+    g = (np.full(3, np.nan) if gt is None else
+         -np.array([gt.wrench.force.x, gt.wrench.force.y, gt.wrench.force.z]))
+    torso = q[runner.model.indices(list(runner.model.spec.torso_joints))]
+    err = float(np.linalg.norm(exerted - PRESS_FORCE) / np.linalg.norm(PRESS_FORCE))
+
+    def f(v: np.ndarray, n: int = 4) -> list:
+        return np.round(np.asarray(v, float), n).tolist()
+
+    hand = runner.hand_positions()["right"]
+    print(f"demo: {label}: target {f(target)} m, force exerted {f(exerted, 2)} N "
+          f"({err * 100:.1f} % off; simulator {f(g, 2)} N), hand {f(hand)}"
+          f" m, fingertip {f(hand_contact_point(runner.model, q))} m, torso "
+          f"{f(np.degrees(torso), 2)} deg", flush=True)
+
+
+def _press_force(runner: DemoRunner) -> np.ndarray:
+    """The force (3,) [N] the right hand exerts on the world: minus the estimator's external
+    force, averaged over ``PRESS_AVERAGE`` s after ``PRESS_SETTLE`` s of settling."""
+    runner.wait_sim(PRESS_SETTLE)
+    t = runner.sim_time()
+    runner.wait_sim(PRESS_AVERAGE)
+    return -runner.force_since("right", t)
 
 
 def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
@@ -654,78 +678,94 @@ def press(runner: DemoRunner, name: str = "press") -> PhaseResult:
     The controller is a joint spring (position mode, ``tau = -K (q - q_d) + g``): a force is
     realised by a target beyond the surface, ``x_contact + C F`` with the compliance
     ``C = J_h K^-1 J_c^T`` of the hand frame for a force at the contact point (the lowest
-    point of the hand's collision hull: the fingertips, about 6 cm below the frame;
-    :func:`contact_compliance`). The hand goes above the point, down until the fingertips
-    touch the table (:func:`hand_contact_point`; the contact posture is measured), then up to
-    ``PRESS_MAX_ITERATIONS`` reaches through /pmp/reach_action with the force target
-    (``right_force``: the plan's torques at the final posture are checked against the limits)
-    correct the target by ``C (F - F_measured)`` from the wrench estimator's force (an outer
-    force loop on the estimate, as the iCub's force control closes it on the FT sensors),
-    until the estimate is within ``PRESS_STOP_TOLERANCE``. The model leaves out the contact's
-    friction and the hand turning about it: after each press Broyden's update
-    (:func:`press_compliance_update`) fits ``C`` to the measured force changes, in all three
-    directions (the sideways force of friction included).
-    Judged by :func:`judge_press` on the estimate averaged over the last 0.3 s, the
-    simulator's contact force reported beside it."""
+    point of the hand's collision hull: the fingertips, about 5 cm below the frame;
+    :func:`contact_compliance`). The hand goes above the point, then with its orientation
+    kept (``use_orientation``, the orientation measured above the point) down until the
+    fingertips touch the table (:func:`hand_contact_point`),
+    then up to ``PRESS_MAX_ITERATIONS`` reaches through /pmp/reach_action with the force
+    target (``right_force``) correct the target from the wrench estimator's force
+    (:class:`~icub_pmp.control.press_loop.PressLoop`: an outer force loop on the estimate, as
+    the iCub's force control closes it on the FT sensors, with Broyden's update of ``C``
+    guarded against secants that disagree with the model, a capped step and a return to the
+    best press), until the estimate is within ``PRESS_STOP_TOLERANCE``; when the last press
+    is not the best, the hand goes back to the best one's target. Without the kept
+    orientation the planner's position-only target let the hand turn about the fingertips:
+    the frame went down with the target, the force did not (docs/decisions/0069).
+    Judged by :func:`judge_press` on the last press's estimate (mean over
+    ``PRESS_AVERAGE`` s), the simulator's contact force reported beside it."""
+    from icub_pmp.control.press_loop import PressLoop, PressLoopConfig
+    from icub_pmp.kinematics.rotations import matrix_to_quat_wxyz
+
     spec = runner.model.spec
     stiffness = joint_stiffness(list(spec.torso_joints) + list(spec.arm_joints("right")))
     frame = spec.hand_frame("right")
     runner.set_object("cylinder", PRESS_CYLINDER_AWAY)  # phase 5 left it beside the point
     runner.pmp_reach(f"{name}_above", {"right": PRESS_POINT + [0.0, 0.0, 0.08]},
                      use_torso=True, tau=1.5, judge_physics=False)
+    # from here the hand keeps the orientation it has above the point
+    q = runner.q()
+    above = runner.model.frame_pose(q, frame)
+    keep = {"right": matrix_to_quat_wxyz(np.asarray(above.rotation))}
     # touch: the hand frame lowered until its hull's lowest point (the fingertips) is 3 mm
     # into the table top, then 1 cm further while the estimator feels less than 1 N
-    above = runner.hand_positions()["right"]
-    drop = above[2] - hand_contact_point(runner.model, runner.q())[2]
+    drop = float(above.translation[2]) - hand_contact_point(runner.model, q)[2]
     touch = PRESS_POINT + [0.0, 0.0, drop - 0.003]
+    norm = float(np.linalg.norm(PRESS_FORCE))
     for _ in range(4):
         runner.pmp_reach(f"{name}_touch", {"right": touch}, use_torso=True, tau=1.5,
-                         judge_physics=False)
-        runner.wait_sim(0.3)
-        t = runner.sim_time()
-        runner.wait_sim(0.3)
-        estimated = runner.force_since("right", t)
-        if float(-estimated @ PRESS_FORCE) / float(np.linalg.norm(PRESS_FORCE)) >= 1.0:
+                         judge_physics=False, orientations=keep)
+        exerted = _press_force(runner)
+        if float(exerted @ PRESS_FORCE) / norm >= 1.0:
             break
         touch = touch + [0.0, 0.0, -0.01]
-    contact = runner.hand_positions()["right"]  # the hand at the measured contact posture
+    _log_press(runner, f"{name}_touch", touch, exerted)
     q = runner.q()
+    contact = runner.hand_positions()["right"]  # the hand at the measured contact posture
     C = contact_compliance(runner.model, q, frame, hand_contact_point(runner.model, q),
-                           stiffness)
-    # the first press: from the measured contact, as if no force were exerted yet
-    target = contact + C @ (PRESS_FORCE + estimated)
-    norm = float(np.linalg.norm(PRESS_FORCE))
-    previous = (contact, -estimated)
+                           stiffness, keep_orientation=True)
+    # the touch is the loop's first press: its target and force are measured like the others
+    loop = PressLoop(PRESS_FORCE, C, PressLoopConfig(stop_tolerance=PRESS_STOP_TOLERANCE,
+                                                     max_step=PRESS_MAX_STEP))
+    loop.record(touch, exerted)
+
+    def press_at(label: str, target: np.ndarray) -> PhaseResult:
+        res = runner.pmp_reach(label, {"right": target}, use_torso=True, tau=1.0,
+                               judge_physics=False, forces={"right": PRESS_FORCE},
+                               orientations=keep)
+        rec = loop.record(target, _press_force(runner))
+        _log_press(runner, label, target, rec.exerted)
+        return res
+
     r = None
-    errors = []
     for k in range(PRESS_MAX_ITERATIONS):
-        r = runner.pmp_reach(f"{name}_{k}", {"right": target}, use_torso=True, tau=1.0,
-                             judge_physics=False, forces={"right": PRESS_FORCE})
-        runner.wait_sim(0.3)
-        t = runner.sim_time()
-        runner.wait_sim(0.3)
-        estimated = runner.force_since("right", t)
-        exerted = -estimated
-        errors.append(float(np.linalg.norm(exerted - PRESS_FORCE)) / norm)
-        if errors[-1] <= PRESS_STOP_TOLERANCE:
+        r = press_at(f"{name}_{k}", loop.next_target())
+        if loop.done:
             break
-        C = press_compliance_update(C, target - previous[0], exerted - previous[1])
-        previous = (target.copy(), exerted)
-        target = target + C @ (PRESS_FORCE - exerted)
     if r is None:  # PRESS_MAX_ITERATIONS < 1
         raise RuntimeError("press: no press was made")
+    returned = loop.presses[-1] is not loop.best
+    if returned:  # end on the best press: back to its target, measured again
+        r = press_at(f"{name}_best", loop.best.target)
+    final = loop.presses[-1]
     r.name = name
-    r.extra["press_depth_m"] = float(np.linalg.norm(target - contact))
-    r.extra["press_iterations"] = float(len(errors))
-    r.extra["press_first_error_rel"] = errors[0]
-    r.extra.update({f"press_error_rel_{k}": e for k, e in enumerate(errors)})
+    r.extra["press_depth_m"] = float(np.linalg.norm(final.target - contact))
+    r.extra["press_iterations"] = float(len(loop.presses) - 1)
+    r.extra["press_touch_error_rel"] = loop.presses[0].error
+    r.extra["press_first_error_rel"] = loop.presses[1].error
+    r.extra["press_returned_to_best"] = float(returned)
+    # the compliance down, the model's and as fitted by the loop [m/N]
+    r.extra["press_model_compliance_zz"] = float(loop.model[2, 2])
+    r.extra["press_fitted_compliance_zz"] = float(loop.compliance[2, 2])
+    r.extra["press_secants_rejected"] = float(sum(
+        1 for p in loop.presses[1:] if p.base >= 0 and not p.secant_accepted))
+    r.extra.update({f"press_error_rel_{k}": p.error for k, p in enumerate(loop.presses[1:])})
     gt = runner.latest.get("gt_right")
     truth = None if gt is None else np.array([gt.wrench.force.x, gt.wrench.force.y,
                                               gt.wrench.force.z])
-    ok, message, figures = judge_press(estimated, PRESS_FORCE, truth)
+    ok, message, figures = judge_press(-final.exerted, PRESS_FORCE, truth)
     r.extra.update(figures)
     r.success = bool(r.success and ok)
-    r.message = f"{message} after {len(errors)} presses ({r.message})"
+    r.message = f"{message} after {len(loop.presses) - 1} presses ({r.message})"
     # lift the hand off the table
     runner.pmp_reach(f"{name}_off", {"right": PRESS_POINT + [0.0, 0.0, 0.08]},
                      use_torso=True, tau=1.0, judge_physics=False)
