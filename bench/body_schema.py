@@ -230,6 +230,51 @@ def eye_hand_vs_triangulation(n_train: int, n_test: int, perturbed: bool, evals:
     return out
 
 
+def eye_hand_figures(quick: bool, truth: PinocchioJacobianProvider, test_hand: np.ndarray,
+                     save_models: str = "") -> dict:
+    """The eye-hand map's figures (nominal and perturbed cameras; module doc), keyed as in the
+    JSON line; ``test_hand``: the held-out right-hand babbles (the fixation protocol's hands
+    with --quick); ``save_models``: write the maps to that directory."""
+    eh: dict = {}
+    n_eh = (EH_QUICK if quick else (15000, 5000))
+    fixation_hands = test_hand[:n_eh[1]] if quick else analytic_babbling("right", n_eh[1], 400,
+                                                                     truth).hand
+    for name, pert in (("nominal", False), ("perturbed", True)):
+        eh[name] = eye_hand_vs_triangulation(
+            n_eh[0], n_eh[1], pert, EH_EVALS_QUICK if quick else 300, truth, fixation_hands,
+            str(Path(save_models) / f"eye_hand_{name}.npz") if save_models else "")
+        for test_name, r in eh[name].items():
+            print(f"eye-hand {name}, {test_name}: map RMSE {r['eyehand_rmse']:.1f} mm (median "
+                  f"{r['eyehand_median']:.1f}) vs triangulation {r['tri_rmse']:.1f} mm (median "
+                  f"{r['tri_median']:.1f})", file=sys.stderr)
+        print(f"  paper {PAPER['eyehand_err_mm_mean']} mean, {PAPER['eyehand_err_mm_std']} std",
+              file=sys.stderr)
+    return {
+        "eyehand_err_mm_mean": eh["nominal"]["fixation"]["eyehand_mean"],
+        "eyehand_err_mm_std": eh["nominal"]["fixation"]["eyehand_std"],
+        "triangulation_err_mm_mean": eh["nominal"]["fixation"]["tri_mean"],
+        "triangulation_err_mm_std": eh["nominal"]["fixation"]["tri_std"],
+        "eyehand_err_mm_mean_perturbed": eh["perturbed"]["fixation"]["eyehand_mean"],
+        "eyehand_err_mm_std_perturbed": eh["perturbed"]["fixation"]["eyehand_std"],
+        "triangulation_err_mm_mean_perturbed": eh["perturbed"]["fixation"]["tri_mean"],
+        "triangulation_err_mm_std_perturbed": eh["perturbed"]["fixation"]["tri_std"],
+        "eyehand_rmse_mm_perturbed": round(eh["perturbed"]["fixation"]["eyehand_rmse"], 2),
+        "triangulation_rmse_mm_perturbed": round(eh["perturbed"]["fixation"]["tri_rmse"], 2),
+        "eyehand_beats_triangulation_perturbed": bool(
+            eh["perturbed"]["fixation"]["eyehand_rmse"]
+            < eh["perturbed"]["fixation"]["tri_rmse"]),
+        "eyehand_rmse_mm_gaze": round(eh["nominal"]["gaze"]["eyehand_rmse"], 2),
+        "triangulation_rmse_mm_gaze": round(eh["nominal"]["gaze"]["tri_rmse"], 2),
+        "eyehand_err_mm_table_median": round(eh["nominal"]["table"]["eyehand_median"], 2),
+        "eyehand_err_mm_table_p95": round(eh["nominal"]["table"]["eyehand_p95"], 2),
+        "triangulation_err_mm_table_median": round(eh["nominal"]["table"]["tri_median"], 2),
+        "eyehand_err_mm_table_median_perturbed": round(
+            eh["perturbed"]["table"]["eyehand_median"], 2),
+        "triangulation_err_mm_table_median_perturbed": round(
+            eh["perturbed"]["table"]["tri_median"], 2),
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="small dataset, < 2 min")
@@ -240,8 +285,18 @@ def main() -> None:
                          "(eye_hand_nominal.npz, eye_hand_perturbed.npz) to DIR")
     ap.add_argument("--curve", action="store_true",
                     help="+ error vs samples and hidden sizes (each trained within the budget)")
+    ap.add_argument("--eye-hand-only", action="store_true",
+                    help="only the eye-hand map's figures (and models with --save-models)")
     args = ap.parse_args()
     q = args.quick
+    if args.eye_hand_only:
+        truth = PinocchioJacobianProvider()
+        load_start = os.getloadavg()
+        test_hand = analytic_babbling("right", 500 if q else 2000, 200, truth).hand
+        out = eye_hand_figures(q, truth, test_hand, args.save_models)
+        print(json.dumps({**out, "paper": PAPER, "load_avg": [
+            round(load_start[0], 1), round(os.getloadavg()[0], 1)]}))
+        return
     n_train, n_test = (3000, 500) if q else (10000, 2000)
     budget = 30.0 if q else 60.0  # [s] of CPU time (BUDGET_CLOCK)
     hidden = DEFAULT_HIDDEN
@@ -292,20 +347,7 @@ def main() -> None:
           f"{np.mean(e_analytic <= SUCCESS):.2f} (median {np.median(e_analytic) * 1e3:.2f} mm)",
           file=sys.stderr)
 
-    eh = {}
-    n_eh = (EH_QUICK if q else (15000, 5000))
-    fixation_hands = test.hand[:n_eh[1]] if q else analytic_babbling("right", n_eh[1], 400,
-                                                                     truth).hand
-    for name, pert in (("nominal", False), ("perturbed", True)):
-        eh[name] = eye_hand_vs_triangulation(
-            n_eh[0], n_eh[1], pert, EH_EVALS_QUICK if q else 300, truth, fixation_hands,
-            str(Path(args.save_models) / f"eye_hand_{name}.npz") if args.save_models else "")
-        for test_name, r in eh[name].items():
-            print(f"eye-hand {name}, {test_name}: map RMSE {r['eyehand_rmse']:.1f} mm (median "
-                  f"{r['eyehand_median']:.1f}) vs triangulation {r['tri_rmse']:.1f} mm (median "
-                  f"{r['tri_median']:.1f})", file=sys.stderr)
-        print(f"  paper {PAPER['eyehand_err_mm_mean']} mean, {PAPER['eyehand_err_mm_std']} std",
-              file=sys.stderr)
+    eh_keys = eye_hand_figures(q, truth, test.hand, args.save_models)
 
     # adaptation: a 12 cm tool along the hand's x axis; babbling goes on with the tool and the
     # model learns online: after each batch of new babbles, training continues from the current
@@ -401,28 +443,7 @@ def main() -> None:
         "pmp_learned_err_mm_median": round(float(np.median(e_learned)) * 1e3, 2),
         "pmp_analytic_success": round(float(np.mean(e_analytic <= SUCCESS)), 3),
         "pmp_analytic_err_mm_median": round(float(np.median(e_analytic)) * 1e3, 3),
-        "eyehand_err_mm_mean": eh["nominal"]["fixation"]["eyehand_mean"],
-        "eyehand_err_mm_std": eh["nominal"]["fixation"]["eyehand_std"],
-        "triangulation_err_mm_mean": eh["nominal"]["fixation"]["tri_mean"],
-        "triangulation_err_mm_std": eh["nominal"]["fixation"]["tri_std"],
-        "eyehand_err_mm_mean_perturbed": eh["perturbed"]["fixation"]["eyehand_mean"],
-        "eyehand_err_mm_std_perturbed": eh["perturbed"]["fixation"]["eyehand_std"],
-        "triangulation_err_mm_mean_perturbed": eh["perturbed"]["fixation"]["tri_mean"],
-        "triangulation_err_mm_std_perturbed": eh["perturbed"]["fixation"]["tri_std"],
-        "eyehand_rmse_mm_perturbed": round(eh["perturbed"]["fixation"]["eyehand_rmse"], 2),
-        "triangulation_rmse_mm_perturbed": round(eh["perturbed"]["fixation"]["tri_rmse"], 2),
-        "eyehand_beats_triangulation_perturbed": bool(
-            eh["perturbed"]["fixation"]["eyehand_rmse"]
-            < eh["perturbed"]["fixation"]["tri_rmse"]),
-        "eyehand_rmse_mm_gaze": round(eh["nominal"]["gaze"]["eyehand_rmse"], 2),
-        "triangulation_rmse_mm_gaze": round(eh["nominal"]["gaze"]["tri_rmse"], 2),
-        "eyehand_err_mm_table_median": round(eh["nominal"]["table"]["eyehand_median"], 2),
-        "eyehand_err_mm_table_p95": round(eh["nominal"]["table"]["eyehand_p95"], 2),
-        "triangulation_err_mm_table_median": round(eh["nominal"]["table"]["tri_median"], 2),
-        "eyehand_err_mm_table_median_perturbed": round(
-            eh["perturbed"]["table"]["eyehand_median"], 2),
-        "triangulation_err_mm_table_median_perturbed": round(
-            eh["perturbed"]["table"]["tri_median"], 2),
+        **eh_keys,
         "adapt_samples": adapt,
         "adapt_goal_mm": round(goal, 2),
         "adapt_err_mm_before": round(before, 1),
