@@ -30,11 +30,13 @@ null (the quick run does not start the graph).
   planned final posture vs the target; success = within 5 mm.
 - Eye-hand map (force paper eq 12): 7-50-3 learned from gaze samples of babbled hands (both
   arms with the trunk, uniform within the limits, half of them directed over the table region
-  ``TABLE_REGION``; the gaze controller follows each hand with
-  the neck and the eyes, lagging up to ``GAZE_LAG`` behind it, so the hand is seen anywhere
-  around the image centre; the cameras of the simulator's eye kinematics, 0.3 px pixel noise;
-  decision 0070), trained and tested on the cameras as they are; triangulation assumes the
-  nominal cameras. Nominal: the real cameras are nominal. Perturbed: principal points shifted
+  ``TABLE_REGION``; the gaze controller follows each hand with the neck and the eyes, lagging
+  up to ``GAZE_LAG`` behind it, so the hand is seen anywhere around the image centre), plus
+  half as many samples of the eyes alone fixating other babbles with the head at rest (as when
+  the gaze controller keeps its neck); the cameras of the simulator's eye kinematics, 0.3 px
+  pixel noise (decision 0070). Trained and tested on the cameras as they are; triangulation
+  assumes the nominal cameras. Nominal: the real cameras are nominal. Perturbed: principal
+  points shifted
   (+3, -2) px and (-2, +3) px, left camera rotated 1 deg about its y axis. Errors in the
   head-centred frame (``head``) on held-out data: ``eyehand_err_mm_mean``/``_std``/
   ``_rmse_mm_perturbed`` on right-hand babbles fixated with the head at rest (the protocol of
@@ -74,6 +76,7 @@ from icub_pmp.body_schema import (  # noqa: E402
     LearnedJacobianProvider,
     LmTrainer,
     LmTrainerConfig,
+    StereoSamples,
     babbled_hands,
     gaze_samples,
     load_dataset,
@@ -106,6 +109,8 @@ EH_QUICK = (2000, 300)
 EH_EVALS_QUICK = 300
 #: the gaze lags the babbling hand by up to this [m] (the hand seen around the image centre)
 GAZE_LAG = 0.2
+#: samples of the eyes alone following the hand (head at rest), per gaze sample
+EYES_ONLY_FRACTION = 0.5
 #: the table region of bench/vision_reach.py's cylinder (x, y, z lower, upper) [m, root_link]:
 #: the cylinder's placements with 4 cm around, from the table top (-0.09) to its top (+0.03);
 #: half the babbles are directed there (the hand over the table where the robot acts)
@@ -196,7 +201,15 @@ def eye_hand_vs_triangulation(n_train: int, n_test: int, perturbed: bool, evals:
     gaze = GazeController(model=model)
     rest = RobotSpec.load().posture("rest")
     hands, postures = babbled_hands(n_train, 300, provider, region=TABLE_REGION)
-    train = gaze_samples(n_train, 1, eyes, gaze, hands, postures, cams, rot, 0.3, GAZE_LAG)
+    moving = gaze_samples(n_train, 1, eyes, gaze, hands, postures, cams, rot, 0.3, GAZE_LAG)
+    # and the eyes alone following the hand, the head still (the gaze controller keeps the
+    # neck while the target stays within its activation angle): other babbles, head at rest
+    T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
+    q_head, _ = gaze.configuration(rest)
+    n_fix = int(round(EYES_ONLY_FRACTION * n_train))
+    still = stereo_samples(n_fix, 4, eyes, T_root_head, babbled_hands(
+        n_fix, 301, provider, trunk=False)[0], cams, rot, 0.3, gaze, q_head)
+    train = StereoSamples(*(np.concatenate(f) for f in zip(moving, still)))
     m, _ = EyeHandMap.train(train.inputs, train.hands_in_head(), "head",
                             trainer=LmTrainer(LmTrainerConfig(max_evaluations=evals)),
                             camera={"width": nominal.width, "height": nominal.height,
@@ -204,8 +217,6 @@ def eye_hand_vs_triangulation(n_train: int, n_test: int, perturbed: bool, evals:
     if save:
         m.save(save)
     h_test, p_test = babbled_hands(n_test, 400, provider, region=TABLE_REGION)
-    T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
-    q_head, _ = gaze.configuration(rest)
     table = table_points(n_test, 500)
     tests = {
         "gaze": gaze_samples(n_test, 2, eyes, gaze, h_test, p_test, cams, rot, 0.3, GAZE_LAG),
