@@ -28,11 +28,21 @@ null (the quick run does not start the graph).
 - PMP: the same reachable targets (FK of held-out postures) planned from rest with the learned
   provider and with the analytic one (right arm, no torso); the error is the URDF hand at the
   planned final posture vs the target; success = within 5 mm.
-- Eye-hand map (force paper eq 12): 7-50-3 on stereo samples of hands in view (the cameras of
-  the simulator's eye kinematics, head at rest, random eye angles, 0.3 px pixel noise), trained
-  and tested on the cameras as they are; triangulation assumes the nominal cameras. Nominal:
-  the real cameras are nominal. Perturbed: principal points shifted (+3, -2) px and (-2, +3) px,
-  left camera rotated 1 deg about its y axis. Errors in the head-centred frame (``head``).
+- Eye-hand map (force paper eq 12): 7-50-3 learned from gaze samples of babbled hands (both
+  arms with the trunk, uniform within the limits, half of them directed over the table region
+  ``TABLE_REGION``; the gaze controller follows each hand with the neck and the eyes, lagging
+  up to ``GAZE_LAG`` behind it, so the hand is seen anywhere around the image centre), plus
+  half as many samples of the eyes alone fixating other babbles with the head at rest (as when
+  the gaze controller keeps its neck); the cameras of the simulator's eye kinematics, 0.3 px
+  pixel noise (decision 0070). Trained and tested on the cameras as they are; triangulation
+  assumes the nominal cameras. Nominal: the real cameras are nominal. Perturbed: principal
+  points shifted
+  (+3, -2) px and (-2, +3) px, left camera rotated 1 deg about its y axis. Errors in the
+  head-centred frame (``head``) on held-out data: ``eyehand_err_mm_mean``/``_std``/
+  ``_rmse_mm_perturbed`` on right-hand babbles fixated with the head at rest (the protocol of
+  the earlier figures), ``eyehand_rmse_mm_gaze`` on other babbles with the same gaze,
+  ``eyehand_err_mm_table_*`` on points of the table region of bench/vision_reach.py seen with
+  the gaze on the table near them (where the map is used to reach the seen object).
 - Adaptation (tool): the marker moves 12 cm along the hand frame's x axis; babbling goes on
   and the model learns online: after each batch of new babbles (``ADAPT_POOL``: 400 ... 25,600,
   ``--quick`` 200 ... 3,200) training continues from the current model (``lm-normal``, warm
@@ -66,12 +76,15 @@ from icub_pmp.body_schema import (  # noqa: E402
     LearnedJacobianProvider,
     LmTrainer,
     LmTrainerConfig,
+    StereoSamples,
+    babbled_hands,
+    gaze_samples,
     load_dataset,
     perturbed_cameras,
     stereo_samples,
 )
 from icub_pmp.gaze.gaze_controller import GazeController  # noqa: E402
-from icub_pmp.kinematics import IcubModel, RobotSpec  # noqa: E402
+from icub_pmp.kinematics import RobotSpec  # noqa: E402
 from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, EyeKinematics  # noqa: E402
 from icub_pmp.peripersonal import analytic_babbling  # noqa: E402
 from icub_pmp.pmp import PmpConfig, PmpPlanner, ReachGoal  # noqa: E402
@@ -91,6 +104,17 @@ CURVE = ((1000, (32, 41)), (3000, (32, 41)), (10000, (32, 41)), (30000, (32, 41)
 ADAPT_POOL = (400, 800, 1600, 3200, 6400, 12800, 25600)
 ADAPT_POOL_QUICK = (200, 400, 800, 1600, 3200)
 ADAPT_BUDGET, ADAPT_BUDGET_QUICK = 90.0, 10.0
+#: the eye-hand map's gaze samples (train, test) and LM evaluations with --quick (decision 0070)
+EH_QUICK = (2000, 300)
+EH_EVALS_QUICK = 300
+#: the gaze lags the babbling hand by up to this [m] (the hand seen around the image centre)
+GAZE_LAG = 0.2
+#: samples of the eyes alone following the hand (head at rest), per gaze sample
+EYES_ONLY_FRACTION = 0.5
+#: the table region of bench/vision_reach.py's cylinder (x, y, z lower, upper) [m, root_link]:
+#: the cylinder's placements with 4 cm around, from the table top (-0.09) to its top (+0.03);
+#: half the babbles are directed there (the hand over the table where the robot acts)
+TABLE_REGION = ((-0.50, -0.22, -0.09), (-0.26, 0.18, 0.03))
 PAPER = {"body_rmse_mm": "0.04 (6-DoF industrial arm, seed 002)",
          "eyehand_err_mm_mean": "0.31 (x, y; force paper Sect. 4)",
          "eyehand_err_mm_std": "5.5 x/y, about 11 z"}
@@ -142,42 +166,124 @@ def pmp_errors(planner: PmpPlanner, truth, targets, frame) -> np.ndarray:
     return np.array(out)
 
 
-def eye_hand_vs_triangulation(hands_train, hands_test, perturbed: bool, evals: int,
-                              model: IcubModel, save: str = "") -> dict:
-    """Errors [mm] (mean, std per axis, head frame) of the learned map and of triangulation;
-    ``save``: write the map there (.npz)."""
+def _errors_mm(m: EyeHandMap, s, tri: StereoTriangulator) -> tuple[np.ndarray, np.ndarray]:
+    """Errors (n, 3) [mm] in each sample's head frame of the map and of triangulation."""
+    truth = s.hands_in_head()
+    tri_p = np.array([tri.triangulate(tuple(x[:2]), tuple(x[2:4]), T[0], T[1]).position
+                      for x, T in zip(s.inputs, s.poses)])
+    tri_s = s._replace(hands=tri_p)
+    return (m.locate(s.inputs) - truth) * 1e3, (tri_s.hands_in_head() - truth) * 1e3
+
+
+def table_points(n: int, seed: int) -> np.ndarray:
+    """``n`` points (n, 3) [m] uniform over the table region where bench/vision_reach.py moves
+    the cylinder (with a margin), from the table top to the cylinder's top."""
+    rng = np.random.default_rng(seed)
+    return rng.uniform(TABLE_REGION[0], TABLE_REGION[1], size=(n, 3))
+
+
+def eye_hand_vs_triangulation(n_train: int, n_test: int, perturbed: bool, evals: int,
+                              provider: PinocchioJacobianProvider, fixation_hands: np.ndarray,
+                              save: str = "") -> dict:
+    """The eye-hand map learned from ``n_train`` gaze samples of babbled hands (both arms and
+    the trunk, the gaze following each hand, :func:`gaze_samples`) and its errors [mm] vs
+    triangulation's, in the head frame, on held-out samples: ``gaze`` (other babbles, the same
+    gaze), ``fixation`` (the hands ``fixation_hands`` fixated with the head at rest, the
+    protocol of the earlier figures) and ``table`` (points on the table seen with the gaze on
+    the table near them); ``save``: write the map there (.npz)."""
+    model = provider.icub
     eyes = EyeKinematics.from_model(model)
-    T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
     nominal = CameraIntrinsics()
     if perturbed:
         cams, rot = perturbed_cameras()
     else:
         cams, rot = {"left": nominal, "right": nominal}, np.eye(3)
-    gaze = GazeController()
-    q_head, _ = gaze.configuration(RobotSpec.load().posture("rest"))
-    xtr, ptr, _ = stereo_samples(len(hands_train), 1, eyes, T_root_head, hands_train, cams, rot,
-                                 0.3, gaze, q_head)
-    xte, pte, poses = stereo_samples(len(hands_test), 2, eyes, T_root_head, hands_test, cams, rot,
-                                     0.3, gaze, q_head)
-    R, t = T_root_head[:3, :3], T_root_head[:3, 3]
-    to_head = (lambda p: (p - t) @ R)  # noqa: E731 - root_link -> head frame, (n, 3)
-    m, _ = EyeHandMap.train(xtr, to_head(ptr), "head",
+    gaze = GazeController(model=model)
+    rest = RobotSpec.load().posture("rest")
+    hands, postures = babbled_hands(n_train, 300, provider, region=TABLE_REGION)
+    moving = gaze_samples(n_train, 1, eyes, gaze, hands, postures, cams, rot, 0.3, GAZE_LAG)
+    # and the eyes alone following the hand, the head still (the gaze controller keeps the
+    # neck while the target stays within its activation angle): other babbles, head at rest
+    T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
+    q_head, _ = gaze.configuration(rest)
+    n_fix = int(round(EYES_ONLY_FRACTION * n_train))
+    still = stereo_samples(n_fix, 4, eyes, T_root_head, babbled_hands(
+        n_fix, 301, provider, trunk=False)[0], cams, rot, 0.3, gaze, q_head)
+    train = StereoSamples(*(np.concatenate(f) for f in zip(moving, still)))
+    m, _ = EyeHandMap.train(train.inputs, train.hands_in_head(), "head",
                             trainer=LmTrainer(LmTrainerConfig(max_evaluations=evals)),
                             camera={"width": nominal.width, "height": nominal.height,
                                     "fx": nominal.fx, "fy": nominal.fy})
     if save:
         m.save(save)
-    err_map = (m.locate(xte) - to_head(pte)) * 1e3
+    h_test, p_test = babbled_hands(n_test, 400, provider, region=TABLE_REGION)
+    table = table_points(n_test, 500)
+    tests = {
+        "gaze": gaze_samples(n_test, 2, eyes, gaze, h_test, p_test, cams, rot, 0.3, GAZE_LAG),
+        "fixation": stereo_samples(len(fixation_hands), 2, eyes, T_root_head, fixation_hands,
+                                   cams, rot, 0.3, gaze, q_head),
+        "table": gaze_samples(n_test, 3, eyes, gaze, table, [rest] * len(table), cams, rot,
+                              0.3, GAZE_LAG)}
     tri = StereoTriangulator(nominal, nominal)
-    tri_p = np.array([tri.triangulate(tuple(x[:2]), tuple(x[2:4]), T[0], T[1]).position
-                      for x, T in zip(xte, poses)])
-    err_tri = (to_head(tri_p) - to_head(pte)) * 1e3
-    return {"eyehand_mean": np.abs(err_map.mean(axis=0)).round(2).tolist(),
-            "eyehand_std": err_map.std(axis=0).round(2).tolist(),
-            "eyehand_rmse": float(np.sqrt(np.mean(np.sum(err_map ** 2, axis=1)))),
-            "tri_mean": np.abs(err_tri.mean(axis=0)).round(2).tolist(),
-            "tri_std": err_tri.std(axis=0).round(2).tolist(),
-            "tri_rmse": float(np.sqrt(np.mean(np.sum(err_tri ** 2, axis=1))))}
+    out: dict = {}
+    for name, s in tests.items():
+        err_map, err_tri = _errors_mm(m, s, tri)
+        norm_map, norm_tri = np.linalg.norm(err_map, axis=1), np.linalg.norm(err_tri, axis=1)
+        out[name] = {"eyehand_mean": np.abs(err_map.mean(axis=0)).round(2).tolist(),
+                     "eyehand_std": err_map.std(axis=0).round(2).tolist(),
+                     "eyehand_rmse": float(np.sqrt(np.mean(norm_map ** 2))),
+                     "eyehand_median": float(np.median(norm_map)),
+                     "eyehand_p95": float(np.percentile(norm_map, 95)),
+                     "tri_mean": np.abs(err_tri.mean(axis=0)).round(2).tolist(),
+                     "tri_std": err_tri.std(axis=0).round(2).tolist(),
+                     "tri_rmse": float(np.sqrt(np.mean(norm_tri ** 2))),
+                     "tri_median": float(np.median(norm_tri))}
+    return out
+
+
+def eye_hand_figures(quick: bool, truth: PinocchioJacobianProvider, test_hand: np.ndarray,
+                     save_models: str = "") -> dict:
+    """The eye-hand map's figures (nominal and perturbed cameras; module doc), keyed as in the
+    JSON line; ``test_hand``: the held-out right-hand babbles (the fixation protocol's hands
+    with --quick); ``save_models``: write the maps to that directory."""
+    eh: dict = {}
+    n_eh = (EH_QUICK if quick else (15000, 5000))
+    fixation_hands = test_hand[:n_eh[1]] if quick else analytic_babbling("right", n_eh[1], 400,
+                                                                     truth).hand
+    for name, pert in (("nominal", False), ("perturbed", True)):
+        eh[name] = eye_hand_vs_triangulation(
+            n_eh[0], n_eh[1], pert, EH_EVALS_QUICK if quick else 300, truth, fixation_hands,
+            str(Path(save_models) / f"eye_hand_{name}.npz") if save_models else "")
+        for test_name, r in eh[name].items():
+            print(f"eye-hand {name}, {test_name}: map RMSE {r['eyehand_rmse']:.1f} mm (median "
+                  f"{r['eyehand_median']:.1f}) vs triangulation {r['tri_rmse']:.1f} mm (median "
+                  f"{r['tri_median']:.1f})", file=sys.stderr)
+        print(f"  paper {PAPER['eyehand_err_mm_mean']} mean, {PAPER['eyehand_err_mm_std']} std",
+              file=sys.stderr)
+    return {
+        "eyehand_err_mm_mean": eh["nominal"]["fixation"]["eyehand_mean"],
+        "eyehand_err_mm_std": eh["nominal"]["fixation"]["eyehand_std"],
+        "triangulation_err_mm_mean": eh["nominal"]["fixation"]["tri_mean"],
+        "triangulation_err_mm_std": eh["nominal"]["fixation"]["tri_std"],
+        "eyehand_err_mm_mean_perturbed": eh["perturbed"]["fixation"]["eyehand_mean"],
+        "eyehand_err_mm_std_perturbed": eh["perturbed"]["fixation"]["eyehand_std"],
+        "triangulation_err_mm_mean_perturbed": eh["perturbed"]["fixation"]["tri_mean"],
+        "triangulation_err_mm_std_perturbed": eh["perturbed"]["fixation"]["tri_std"],
+        "eyehand_rmse_mm_perturbed": round(eh["perturbed"]["fixation"]["eyehand_rmse"], 2),
+        "triangulation_rmse_mm_perturbed": round(eh["perturbed"]["fixation"]["tri_rmse"], 2),
+        "eyehand_beats_triangulation_perturbed": bool(
+            eh["perturbed"]["fixation"]["eyehand_rmse"]
+            < eh["perturbed"]["fixation"]["tri_rmse"]),
+        "eyehand_rmse_mm_gaze": round(eh["nominal"]["gaze"]["eyehand_rmse"], 2),
+        "triangulation_rmse_mm_gaze": round(eh["nominal"]["gaze"]["tri_rmse"], 2),
+        "eyehand_err_mm_table_median": round(eh["nominal"]["table"]["eyehand_median"], 2),
+        "eyehand_err_mm_table_p95": round(eh["nominal"]["table"]["eyehand_p95"], 2),
+        "triangulation_err_mm_table_median": round(eh["nominal"]["table"]["tri_median"], 2),
+        "eyehand_err_mm_table_median_perturbed": round(
+            eh["perturbed"]["table"]["eyehand_median"], 2),
+        "triangulation_err_mm_table_median_perturbed": round(
+            eh["perturbed"]["table"]["tri_median"], 2),
+    }
 
 
 def main() -> None:
@@ -190,8 +296,18 @@ def main() -> None:
                          "(eye_hand_nominal.npz, eye_hand_perturbed.npz) to DIR")
     ap.add_argument("--curve", action="store_true",
                     help="+ error vs samples and hidden sizes (each trained within the budget)")
+    ap.add_argument("--eye-hand-only", action="store_true",
+                    help="only the eye-hand map's figures (and models with --save-models)")
     args = ap.parse_args()
     q = args.quick
+    if args.eye_hand_only:
+        truth = PinocchioJacobianProvider()
+        load_start = os.getloadavg()
+        test_hand = analytic_babbling("right", 500 if q else 2000, 200, truth).hand
+        out = eye_hand_figures(q, truth, test_hand, args.save_models)
+        print(json.dumps({**out, "paper": PAPER, "load_avg": [
+            round(load_start[0], 1), round(os.getloadavg()[0], 1)]}))
+        return
     n_train, n_test = (3000, 500) if q else (10000, 2000)
     budget = 30.0 if q else 60.0  # [s] of CPU time (BUDGET_CLOCK)
     hidden = DEFAULT_HIDDEN
@@ -242,16 +358,7 @@ def main() -> None:
           f"{np.mean(e_analytic <= SUCCESS):.2f} (median {np.median(e_analytic) * 1e3:.2f} mm)",
           file=sys.stderr)
 
-    eh = {}
-    n_eh = (1000, 300) if q else (15000, 5000)
-    for name, pert in (("nominal", False), ("perturbed", True)):
-        eh[name] = eye_hand_vs_triangulation(train.hand[:n_eh[0]] if q else analytic_babbling(
-            "right", n_eh[0], 300, truth).hand, test.hand[:n_eh[1]] if q else analytic_babbling(
-            "right", n_eh[1], 400, truth).hand, pert, 40 if q else 300, truth.icub,
-            str(Path(args.save_models) / f"eye_hand_{name}.npz") if args.save_models else "")
-        print(f"eye-hand {name}: map RMSE {eh[name]['eyehand_rmse']:.1f} mm vs triangulation "
-              f"{eh[name]['tri_rmse']:.1f} mm; paper {PAPER['eyehand_err_mm_mean']} mean, "
-              f"{PAPER['eyehand_err_mm_std']} std", file=sys.stderr)
+    eh_keys = eye_hand_figures(q, truth, test.hand, args.save_models)
 
     # adaptation: a 12 cm tool along the hand's x axis; babbling goes on with the tool and the
     # model learns online: after each batch of new babbles, training continues from the current
@@ -347,18 +454,7 @@ def main() -> None:
         "pmp_learned_err_mm_median": round(float(np.median(e_learned)) * 1e3, 2),
         "pmp_analytic_success": round(float(np.mean(e_analytic <= SUCCESS)), 3),
         "pmp_analytic_err_mm_median": round(float(np.median(e_analytic)) * 1e3, 3),
-        "eyehand_err_mm_mean": eh["nominal"]["eyehand_mean"],
-        "eyehand_err_mm_std": eh["nominal"]["eyehand_std"],
-        "triangulation_err_mm_mean": eh["nominal"]["tri_mean"],
-        "triangulation_err_mm_std": eh["nominal"]["tri_std"],
-        "eyehand_err_mm_mean_perturbed": eh["perturbed"]["eyehand_mean"],
-        "eyehand_err_mm_std_perturbed": eh["perturbed"]["eyehand_std"],
-        "triangulation_err_mm_mean_perturbed": eh["perturbed"]["tri_mean"],
-        "triangulation_err_mm_std_perturbed": eh["perturbed"]["tri_std"],
-        "eyehand_rmse_mm_perturbed": round(eh["perturbed"]["eyehand_rmse"], 2),
-        "triangulation_rmse_mm_perturbed": round(eh["perturbed"]["tri_rmse"], 2),
-        "eyehand_beats_triangulation_perturbed": bool(
-            eh["perturbed"]["eyehand_rmse"] < eh["perturbed"]["tri_rmse"]),
+        **eh_keys,
         "adapt_samples": adapt,
         "adapt_goal_mm": round(goal, 2),
         "adapt_err_mm_before": round(before, 1),

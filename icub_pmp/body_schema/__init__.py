@@ -20,6 +20,8 @@ from icub_pmp.body_schema.eye_hand_map import (
 )
 from icub_pmp.body_schema.eye_hand_samples import (
     StereoSamples,
+    babbled_hands,
+    gaze_samples,
     perturbed_cameras,
     stereo_samples,
     view_samples,
@@ -73,6 +75,8 @@ __all__ = [
     "TARGET_SOURCES",
     "perturbed_cameras",
     "stereo_samples",
+    "gaze_samples",
+    "babbled_hands",
     "view_samples",
     "JACOBIAN_SOURCES",
     "JacobianSourceConfig",
