@@ -159,6 +159,37 @@ def test_send_goal_executes_a_trajectory_and_prints_the_result(graph, ros_probe)
     assert "Goal finished with status: ABORTED" in out.stdout
 
 
+def test_posture_brings_the_torso_back_and_leaves_the_other_joints(graph, ros_probe):
+    """`icub posture rest --parts torso` after a trajectory leaned the torso and bent the
+    elbow: the torso is upright again (the rest posture's 0), the elbow (not in --parts) stays
+    where it was; the answer prints the duration chosen within the joints' rate limits and the
+    largest error. Bad input is one line, and nothing moves."""
+    out = run_icub("send-goal", "/impedance_controller/follow_joint_trajectory",
+                   "{trajectory: {joint_names: [torso_roll, torso_yaw, r_elbow], points: "
+                   "[{positions: [0.3, -0.2, 1.2], time_from_start: {sec: 2}}]}}")
+    assert out.returncode == 0, out.stdout + out.stderr
+
+    def joints() -> dict[str, float]:
+        js = ros_probe.collect("/joint_states", JointState, 1)[0]
+        return dict(zip(js.name, js.position))
+
+    before = joints()
+    assert before["torso_roll"] == pytest.approx(0.3, abs=0.05)
+    out = run_icub("posture", "rest", "--parts", "torso")
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "posture rest: reached" in out.stdout and "3 joints (torso) in" in out.stderr
+    after = joints()
+    for j in ("torso_pitch", "torso_roll", "torso_yaw"):
+        assert after[j] == pytest.approx(0.0, abs=0.03), (j, after[j])
+    assert after["r_elbow"] == pytest.approx(before["r_elbow"], abs=0.03)
+    _one_line_error(run_icub("posture", "rets"), "unknown posture 'rets'")
+    _one_line_error(run_icub("posture", "rest", "--parts", "torso,tail"), "unknown part 'tail'")
+    _one_line_error(run_icub("posture", "rest", "--duration", "nan"), "--duration")
+    assert joints()["torso_roll"] == pytest.approx(after["torso_roll"], abs=0.01)
+    out = run_icub("posture", "--list")
+    assert out.returncode == 0 and "rest: " in out.stdout and "park: " in out.stdout
+
+
 def test_pub_once_reaches_the_controller(graph):
     """`icub pub --once` waits for the controller's subscription, publishes one trajectory
     and the controller takes it."""
@@ -213,6 +244,7 @@ def test_a_goal_right_after_a_node_restart_succeeds_with_the_defaults(graph, ros
 @pytest.mark.parametrize("verb, example", [
     ("call", "icub call /sim/reset"), ("pub", "icub pub /effort_command"),
     ("send-goal", "icub send-goal /pmp/reach_action"), ("param", "icub param set"),
+    ("posture", "icub posture rest --parts torso"),
 ])
 def test_help_shows_examples(verb, example, capsys):
     """`icub VERB --help` shows an example (argparse's help, run in this process: the text

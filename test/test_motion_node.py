@@ -65,7 +65,11 @@ def segmenter_node(ros_domain_id):
         node.stop()
 
 
-def _publish_frames(probe, frames, period=0.08, t0=1.0):
+def _publish_frames(probe, frames, period=0.08, t0=1.0, processed=None):
+    """Publish ``frames`` (joint state, camera info, both images) every ``period`` s.
+    ``processed(k)``: True once the node has answered frame k; then the next frame waits for
+    it (up to 10 s), so a loaded machine slows the test down instead of dropping frames from
+    the node's sensor-data queue."""
     node = probe.node
     sd = qos_profile_sensor_data
     pubs = {s: node.create_publisher(Image, f"/cam/{s}/image_raw", sd) for s in ("left", "right")}
@@ -74,7 +78,7 @@ def _publish_frames(probe, frames, period=0.08, t0=1.0):
     joints = node.create_publisher(type(make_joint_state([])), "/joint_states", sd)
     assert probe.wait_for(lambda: all(p.get_subscription_count() > 0 for p in pubs.values()),
                           30.0)
-    for f in frames:
+    for k, f in enumerate(frames):
         stamp = sec_to_time(t0 + f.index / 30.0)
         names = list(f.joints)
         joints.publish(make_joint_state(names, position=[f.joints[n] for n in names],
@@ -86,6 +90,8 @@ def _publish_frames(probe, frames, period=0.08, t0=1.0):
             img = f.left if s == "left" else f.right
             pubs[s].publish(array_to_image(img, "rgb8", stamp, f"{s[0]}_eye_optical"))
         time.sleep(period)
+        if processed is not None:
+            probe.wait_for(lambda k=k: processed(k), 10.0)
 
 
 def test_node_publishes_masks_blobs_and_target(segmenter_node, ros_probe, frames):
@@ -100,7 +106,7 @@ def test_node_publishes_masks_blobs_and_target(segmenter_node, ros_probe, frames
         n.create_subscription(PointStamped, "/motion/target", targets.append, 10),
     ]
     assert ros_probe.wait_for_topic("/motion/target", 30.0)
-    _publish_frames(ros_probe, frames)
+    _publish_frames(ros_probe, frames, processed=lambda k: len(masks) >= k - 1)
     ros_probe.wait_for(lambda: len(masks) >= len(frames) - 2 and len(targets) >= 5, 10.0)
     for s in subs:
         n.destroy_subscription(s)
@@ -273,10 +279,20 @@ def test_reset_target_forgets_the_followed_object(segmenter_node, ros_probe, fra
     object moves again); a second call says there was none."""
     from std_srvs.srv import Trigger
 
-    targets = []
+    targets, masks = [], []
     sub = ros_probe.node.create_subscription(PointStamped, "/motion/target", targets.append, 10)
-    _publish_frames(ros_probe, frames, t0=50.0)  # after the other tests' frames and clock
+    msub = ros_probe.node.create_subscription(Image, "/motion/left/mask", masks.append,
+                                              qos_profile_sensor_data)
+    # after the other tests' frames and clock
+    _publish_frames(ros_probe, frames, t0=50.0, processed=lambda k: len(masks) >= k - 1)
     assert ros_probe.wait_for(lambda: len(targets) >= 5, 10.0), segmenter_node.output()
+    # every frame answered before the reset: a frame still queued in the node would give the
+    # target back before the second call (seen on a loaded machine)
+    count = -1
+    while count != len(masks):
+        count = len(masks)
+        time.sleep(1.0)
+    ros_probe.node.destroy_subscription(msub)
     first = ros_probe.call("/motion/reset_target", Trigger, Trigger.Request(), timeout=30.0)
     assert first.success and first.message == "target dropped", first.message
     again = ros_probe.call("/motion/reset_target", Trigger, Trigger.Request(), timeout=30.0)

@@ -34,7 +34,7 @@ __all__ = ["main", "build_parser"]
 
 #: subcommand modules of icub_pmp.cli, in the order of ``icub --help``
 SUBCOMMANDS = ("graph", "echo", "hz", "pub", "call", "send_goal", "param", "reach", "peri",
-               "bag", "babble", "calibrate_eyes")
+               "bag", "babble", "calibrate_eyes", "posture")
 
 
 def build_parser() -> argparse.ArgumentParser:

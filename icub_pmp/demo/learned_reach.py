@@ -277,6 +277,19 @@ class _Driver:
                            else float("nan"))
 
 
+def _wait_serving(probe, node: NodeProcess, timeout: float = 300.0) -> None:  # noqa: ANN001
+    """Wait until the planner process ``node`` has said that it serves /pmp/reach_action.
+    The previous planner's server stays "ready" on the graph for a while after it stopped (its
+    DDS endpoints go away late): a goal sent then went to nobody and was never acknowledged
+    (test_demo_learned_reach, 2026-12-04, the analytic planner's first goal)."""
+    if not probe.wait_for(lambda: "serving /pmp/reach" in node.output() or not node.alive(),
+                          timeout):
+        raise TimeoutError(f"pmp_planner did not serve /pmp/reach_action within {timeout} s: "
+                           + node.output()[-2000:])
+    if not node.alive():
+        raise RuntimeError("pmp_planner exited at start-up: " + node.output()[-2000:])
+
+
 def _wait_for_segmenter(probe, frames: int = 30) -> None:  # noqa: ANN001 - RosProbe
     """Wait until the motion segmenter has processed ``frames`` images of the right camera:
     a motion while it starts up goes unseen."""
@@ -294,13 +307,16 @@ def see(runner: DemoRunner, motion: ObjectMotion, timeout: float) -> Seen:
     first still stereo estimate after it stopped, waiting up to ``timeout`` s of simulated
     time (TimeoutError saying so when none comes: the reach never falls back to the ground
     truth). The cylinder's true position is read only to judge."""
-    from icub_pmp.demo.scenario import wait_still_target
+    from icub_pmp.demo.scenario import estimates_summary, wait_still_target
     from icub_pmp.ros.conversions import time_to_sec
 
     start, velocity = np.asarray(motion.start), np.asarray(motion.velocity)
     runner.look_at(start + 0.5 * velocity * motion.duration)
     runner.set_object("cylinder", start)
     runner.wait_sim(0.3)
+    # a target the segmenter still holds (the warm-up's, the last object's) must not gate the
+    # new motion out (decision 0058, rule 12, as the demo's vision phase does)
+    runner.reset_target()
     runner.set_tracking(True)
     try:
         runner.estimates.clear()
@@ -316,7 +332,9 @@ def see(runner: DemoRunner, motion: ObjectMotion, timeout: float) -> Seen:
         raise TimeoutError(
             f"no still stereo target of the cylinder within {timeout} s of simulated time "
             f"after it stopped at {np.round(motion.end, 3).tolist()} (/motion/target/estimate;"
-            f" {len(runner.estimates)} estimates while it moved): nothing seen to reach")
+            f" {len(runner.estimates)} estimates while it moved; after it stopped: "
+            f"{estimates_summary(list(runner.estimates), began + motion.duration)}): nothing "
+            "seen to reach")
     centre = np.array([est.position.x, est.position.y, est.position.z])
     stamp = time_to_sec(est.header.stamp)
     return Seen(np.array([est.top.x, est.top.y, est.top.z]), float(est.radius),
@@ -416,6 +434,7 @@ def run_reaches(model_path: Path, targets: np.ndarray, tau: float = 2.0,
                                                 "--ros-args", *args], env=env)
                     off = learned_offset if planner == "learned" else np.zeros(3)
                     try:
+                        _wait_serving(probe, node)
                         for target in targets:
                             drv.rest()
                             rec = drv.reach(planner, np.asarray(target, dtype=float), tau, off)

@@ -409,6 +409,31 @@ def settled_still_estimate(estimates: list, after: float,
     return None
 
 
+def estimates_summary(estimates: list, after: float) -> str:
+    """What the /motion/target/estimate messages stamped after ``after`` [s] said, in one
+    line (why no settled still target came): how many per state, the points of the still
+    ones against the most any estimate had, and the spread of the still positions [mm]."""
+    late = [m for m in estimates if time_to_sec(m.header.stamp) > after]
+    if not late:
+        return "no estimate stamped after it"
+    states: dict[str, int] = {}
+    for m in late:
+        states[m.state or "?"] = states.get(m.state or "?", 0) + 1
+    most = max((int(m.points) for m in estimates), default=0)
+    still = [m for m in late if m.state == "still" and m.points > 0]
+    text = ", ".join(f"{n} {s}" for s, n in sorted(states.items()))
+    if still:
+        pts = [int(m.points) for m in still]
+        pos = np.array([[m.position.x, m.position.y, m.position.z] for m in still])
+        step = (np.linalg.norm(np.diff(pos, axis=0), axis=1) * 1e3 if len(pos) > 1
+                else np.zeros(0))
+        text += (f"; still points {min(pts)}-{max(pts)} (most of any estimate {most}, "
+                 f"partial below {STILL_MIN_POINTS_RATIO * most:.0f})")
+        if step.size:
+            text += f", still steps {step.min():.1f}-{step.max():.1f} mm"
+    return text
+
+
 def wait_still_target(runner: DemoRunner, after: float, timeout: float = 3.0):  # noqa: ANN201
     """The first settled still /motion/target/estimate stamped after ``after`` [s]
     (:func:`settled_still_estimate`), waiting up to ``timeout`` s of simulated time; None if
@@ -462,7 +487,8 @@ def vision_reach(runner: DemoRunner, start: np.ndarray, velocity: np.ndarray, du
     if est is None:
         runner.set_tracking(False)
         return PhaseResult(name, False, "no still stereo target of the cylinder after it "
-                           "stopped (/motion/target/estimate)", sim_start=t0,
+                           "stopped (/motion/target/estimate: "
+                           f"{estimates_summary(list(runner.estimates), t_end)})", sim_start=t0,
                            extra={"motion_s": t_end - t0})
     stamp = time_to_sec(est.header.stamp)
     first = min((time_to_sec(m.header.stamp) for m in list(runner.estimates)),
