@@ -45,3 +45,12 @@ def test_unknown_cube_is_a_one_line_error(tmp_path):
     assert p.returncode == 2, p.stderr
     assert "cube_purple" in p.stderr and "cube_right" in p.stderr
     assert "Traceback" not in p.stderr and not (tmp_path / "x").exists()
+
+
+def test_missing_maps_are_a_one_line_error(tmp_path):
+    """``--maps`` naming a folder without saved maps: exit 2 saying which file could not be
+    loaded, no traceback, no graph started (it was a traceback)."""
+    p = _run("--maps", str(tmp_path / "no_maps"), "--out", str(tmp_path / "x"), timeout=120)
+    assert p.returncode == 2, p.stderr
+    assert "--maps: cannot load the peripersonal map" in p.stderr and "no_maps" in p.stderr
+    assert "Traceback" not in p.stderr and not (tmp_path / "x").exists()

@@ -160,6 +160,17 @@ def _space(maps: Path | None) -> object:
     return space
 
 
+def space_or_exit(ap: argparse.ArgumentParser, maps: Path | None) -> object:
+    """:func:`_space`, or a one-line usage error (exit 2) when the maps cannot be loaded (a
+    wrong ``--maps`` folder, a damaged file) instead of a traceback."""
+    from icub_pmp.errors import IcubPmpError
+
+    try:
+        return _space(maps)
+    except IcubPmpError as exc:
+        ap.error(f"--maps: {exc}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line (module doc)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -171,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     out = args.out or repo_root() / "bags" / time.strftime("tabletop-%Y%m%d-%H%M%S")
-    report = run_tabletop(_space(args.maps), serial_baseline=not args.no_serial)
+    report = run_tabletop(space_or_exit(ap, args.maps), serial_baseline=not args.no_serial)
     out.mkdir(parents=True, exist_ok=True)
     (out / "report.json").write_text(json.dumps(report, indent=2))
     (out / "report.md").write_text(_markdown(report))

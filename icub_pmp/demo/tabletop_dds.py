@@ -425,7 +425,7 @@ def _save_partial(out: Path, report: dict, runs: list[dict]) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Command line (module doc)."""
     from icub_pmp.demo.demo_runner import DemoRunner
-    from icub_pmp.demo.tabletop import SCENE, WRISTS, _markdown, _space, plan_summary
+    from icub_pmp.demo.tabletop import SCENE, WRISTS, _markdown, plan_summary, space_or_exit
     from icub_pmp.graph import NodeGraph, reserve_domain_id, ros_environment
     from icub_pmp.graph.realism_parameters import PRESETS
     from icub_pmp.ros.probe import RosProbe
@@ -455,7 +455,7 @@ def main(argv: list[str] | None = None) -> int:
                      f"{', '.join(SCENE.objects)}")
         scene = TabletopScene({n: SCENE.objects[n] for n in names}, SCENE.areas,
                               {n: SCENE.destinations[n] for n in names})
-    space = _space(args.maps)
+    space = space_or_exit(ap, args.maps)
     maps_dir = Path(tempfile.mkdtemp(prefix="tabletop_maps_"))
     space.save(maps_dir)
     out = args.out or Path("bags") / time.strftime("tabletop-dds-%Y%m%d-%H%M%S")
