@@ -10,6 +10,9 @@
 # wrench_estimator and impedance_controller run composed in one process, torque_loop
 # (scripts/torque_loop.sh, docs/decisions/0067);
 #   TORQUE_LOOP=0 scripts/graph.sh  # ... or in their own processes
+#   ROBOT_LOOP=1 scripts/graph.sh   # sim_bridge, wrench_estimator and impedance_controller in
+#                                   # one process, the torque loop on the physics thread
+#                                   # (scripts/robot_loop.sh, docs/decisions/0068)
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # SIGINT ignored on entry (bit 2 of SigIgn): re-exec with it restored, once
@@ -28,6 +31,12 @@ case "${TORQUE_LOOP:-1}" in
   1|"") ;;
   0) DEFAULT="${DEFAULT/torque_loop/wrench_estimator impedance_controller}" ;;
   *) echo "graph.sh: TORQUE_LOOP must be 0 or 1, got '${TORQUE_LOOP}'" >&2; exit 2 ;;
+esac
+case "${ROBOT_LOOP:-0}" in
+  0|"") ;;
+  1) [[ "${TORQUE_LOOP:-1}" == 0 ]] && { echo "graph.sh: ROBOT_LOOP=1 and TORQUE_LOOP=0 contradict each other" >&2; exit 2; }
+     DEFAULT="${DEFAULT/sim_bridge torque_loop/robot_loop}" ;;
+  *) echo "graph.sh: ROBOT_LOOP must be 0 or 1, got '${ROBOT_LOOP}'" >&2; exit 2 ;;
 esac
 NODES="${GRAPH_NODES:-$DEFAULT}"
 PIDS=()
@@ -56,7 +65,7 @@ for n in $NODES; do
     echo "graph.sh: skipping $n (not installed)" >&2
     continue
   fi
-  if [[ "$n" == sim_bridge && -n "${MODE:-}" ]]; then
+  if [[ ( "$n" == sim_bridge || "$n" == robot_loop ) && -n "${MODE:-}" ]]; then
     "$ROOT/scripts/node.sh" "$n" --ros-args -p "mode:=$MODE" &
   else
     "$ROOT/scripts/node.sh" "$n" &

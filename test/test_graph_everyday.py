@@ -147,7 +147,9 @@ def test_simulator_killed_mid_motion_aborts_the_goal_with_the_reason(everyday):
     """SIGKILL of sim_bridge while a reach executes: the goal ends aborted (never "reached")
     and the message says that joint states stopped. Runs last: the simulator is gone."""
     proc, probe, robot, client = everyday
-    sim_pid = int(re.search(r"started sim_bridge \(pid (\d+)\)", proc.output()).group(1))
+    # the simulator's process: sim_bridge, or robot_loop (ROBOT_LOOP=1 scripts/graph.sh)
+    sim_pid = int(re.search(r"started (?:sim_bridge|robot_loop) \(pid (\d+)\)",
+                            proc.output()).group(1))
 
     def kill_when_moving(handle) -> None:
         probe.wait_for(lambda: False, 1.0)

@@ -1,8 +1,9 @@
 """The robot_loop process (sim_bridge + wrench_estimator + impedance_controller composed in
-one process, the torque loop inside the simulator: docs/decisions/0068) over DDS in lockstep
-on the ``icub`` preset, started through scripts/robot_loop.sh as a user does: the other nodes
-see the same three nodes and topics, every controller step uses the estimate of its own joint
-state, and the robot reaches a target."""
+one process, the torque loop inside the simulator: docs/decisions/0068) over DDS, in lockstep
+and in free run, on the ``icub`` preset, started through scripts/robot_loop.sh as a user does:
+the other nodes see the same three nodes and topics, every controller step uses the estimate of
+its own joint state, the robot reaches a target, and a stopped estimator ends in a said safe
+hold."""
 
 from __future__ import annotations
 
@@ -20,14 +21,20 @@ from icub_interfaces.msg import SimStatus
 from icub_pmp.ros.conversions import arrays_to_trajectory
 from icub_pmp.ros.qos import LATCHED_QOS
 from icub_pmp.testing import NodeGraph, RosProbe, ros_environment, with_realism
-from icub_pmp.testing.controller_status import controller_status, controller_status_after
+from icub_pmp.testing.controller_status import (
+    assert_stopped_estimator_holds,
+    controller_status,
+    controller_status_after,
+)
 from icub_pmp.testing.sim_clock import wait_sim
 
 
-@pytest.fixture(scope="module")
-def graph(ros_domain_id):
+@pytest.fixture(scope="module", params=["lockstep", "free_run"])
+def graph(request, ros_domain_id):
+    """robot_loop in each simulator mode: lockstep (the demo's) and free run (the everyday
+    graph's, ``ROBOT_LOOP=1 scripts/graph.sh``)."""
     params = with_realism("icub", {
-        "sim_bridge": {"mode": "lockstep", "cameras_enabled": False, "imu_decimation": 10},
+        "sim_bridge": {"mode": request.param, "cameras_enabled": False, "imu_decimation": 10},
         # per-node sections of the composed process (NodeGraph writes them to a file)
         "wrench_estimator": {"publish_every": 10},
         "impedance_controller": {"use_sim_time": True, "mode": "position",
@@ -72,7 +79,7 @@ def test_one_process_serves_the_three_nodes_and_their_topics(graph, probe):
     assert all(m.header.stamp.nanosec % 1_000_000 == 0 and np.isfinite(m.effort).all()
                for m in cmd)
     sim = probe.collect("/sim/status", SimStatus, 1, 30.0, qos=LATCHED_QOS)
-    assert sim and sim[0].mode == "lockstep"
+    assert sim and sim[0].mode == graph.parameters["sim_bridge"]["mode"]
 
 
 def test_every_step_uses_the_estimate_of_its_own_joint_state(graph, probe):
@@ -103,3 +110,11 @@ def test_reaches_a_target_on_the_icub_preset(graph, probe):
     q = dict(zip(js.name, js.position))["r_elbow"]
     assert abs(math.degrees(q - target)) < 0.5, math.degrees(q - target)
     probe.destroy(pub)
+
+
+def test_stopped_estimator_ends_in_a_said_safe_hold(graph, probe):
+    """The estimator inside the simulator's process stopped on purpose (``enabled: false``):
+    the controller latches the estimator-lost safe hold, says so in the process's log and on
+    its status topic, and the simulator keeps stepping on its commands. Runs last (the hold
+    is latched)."""
+    assert_stopped_estimator_holds(probe, graph.procs["robot_loop"])

@@ -11,8 +11,6 @@ import math
 import numpy as np
 import pytest
 from geometry_msgs.msg import WrenchStamped
-from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-from rcl_interfaces.srv import SetParameters
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
@@ -21,7 +19,11 @@ from trajectory_msgs.msg import JointTrajectory
 
 from icub_pmp.ros.conversions import arrays_to_trajectory
 from icub_pmp.testing import NodeGraph, RosProbe, ros_environment, with_realism
-from icub_pmp.testing.controller_status import controller_status, controller_status_after
+from icub_pmp.testing.controller_status import (
+    assert_stopped_estimator_holds,
+    controller_status,
+    controller_status_after,
+)
 from icub_pmp.testing.sim_clock import wait_sim
 
 
@@ -105,13 +107,4 @@ def test_stopped_estimator_ends_in_a_said_safe_hold(graph, probe):
     """With the estimator stopped (``enabled: false``: no sample processed, nothing
     published), the controller latches the estimator-lost safe hold, says it in the log and
     on its status topic, and keeps answering the simulator."""
-    value = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False)
-    req = SetParameters.Request(parameters=[Parameter(name="enabled", value=value)])
-    res = probe.call("/wrench_estimator/set_parameters", SetParameters, req)
-    assert res.results[0].successful, res.results[0].reason
-    proc = graph.procs["torque_loop"]
-    assert proc.wait_for_output("estimator lost", 60.0), proc.output()[-3000:]
-    assert probe.wait_for(lambda: controller_status(probe).status == "safe_hold", 30.0)
-    assert "estimator lost" in controller_status(probe).safe_hold_reason
-    assert not probe.collect("/estimated_joint_torques", JointState, 1, 2.0)
-    assert len(probe.collect("/effort_command", JointState, 20, 30.0)) == 20
+    assert_stopped_estimator_holds(probe, graph.procs["torque_loop"])
