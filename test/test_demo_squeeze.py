@@ -94,11 +94,3 @@ def test_phases_are_selected_by_name_and_unknown_ones_refused(capsys):
     nodes, p = scenario.phase_graph(scenario.PHASES, params)
     assert nodes == scenario.GRAPH and "cameras_enabled" not in p["sim_bridge"]
     assert "/gaze/look_at" in scenario.ready_services(nodes)
-    # --loop robot: the simulator, estimator and controller in robot_loop, their parameters
-    # under their own names, the simulator's services still waited for
-    nodes, p = scenario.phase_graph(scenario.PHASES, params, "robot")
-    assert nodes[0] == "robot_loop" and "sim_bridge" not in nodes and "torque_loop" not in nodes
-    assert {"sim_bridge", "wrench_estimator", "impedance_controller"} <= set(p)
-    assert "/sim/set_object_pose" in scenario.ready_services(nodes)
-    with pytest.raises(ValueError, match="unknown loop 'fast'"):
-        scenario.phase_graph(scenario.PHASES, params, "fast")

@@ -66,7 +66,6 @@ import numpy as np
 from icub_pmp.config import repo_root
 from icub_pmp.demo.demo_runner import PROVISIONAL_PHASES, DemoRunner, PhaseResult
 from icub_pmp.graph import (
-    COMPOSED,
     NodeGraph,
     NodeProcess,
     realism_parameters,
@@ -120,44 +119,21 @@ def parse_phases(text: str) -> tuple[str, ...]:
     return tuple(p for p in PHASES if p in names)
 
 
-#: how the simulator, the estimator and the controller run (``--loop``): ``separate``: three
-#: processes (the default); ``torque``: the simulator apart, the estimator and the controller
-#: in one process (torque_loop, 0067; scripts/graph.sh's default); ``robot``: all three in one
-#: process, the torque loop on the physics thread (robot_loop, docs/decisions/0068). With
-#: ``robot`` the whole demo took 7.5 min instead of about 15, every phase but the vision reach
-#: passing: the lockstep simulator ran ahead of the motion segmenter, which measured the moving
-#: cylinder in 1 frame of its 1.2 s motion (2026-12-04); it is for the phases without vision
-LOOPS: dict[str, tuple[str, ...]] = {"robot": ("robot_loop",),
-                                     "torque": ("sim_bridge", "torque_loop"),
-                                     "separate": ("sim_bridge", "wrench_estimator",
-                                                  "impedance_controller")}
-DEFAULT_LOOP = "separate"
-
-
-def phase_graph(phases: tuple[str, ...], params: dict[str, dict[str, object]],
-                loop: str = "separate") -> tuple[list[str], dict[str, dict[str, object]]]:
-    """The demo graph's processes and node parameters for ``phases``: nodes only other phases
-    need are left out, and the simulator renders no cameras unless ``vision`` runs; ``loop``
-    (:data:`LOOPS`) chooses the processes of the simulator, the estimator and the controller
-    (their parameters stay under the node names: NodeGraph gives a composed process its
-    nodes' sections)."""
-    if loop not in LOOPS:
-        raise ValueError(f"unknown loop {loop!r} (choose from {', '.join(LOOPS)})")
+def phase_graph(phases: tuple[str, ...], params: dict[str, dict[str, object]]
+                ) -> tuple[list[str], dict[str, dict[str, object]]]:
+    """The demo graph's nodes and parameters for ``phases``: nodes only other phases need
+    are left out, and the simulator renders no cameras unless ``vision`` runs."""
     nodes = [n for n in GRAPH
              if n not in _PHASE_NODES or any(p in phases for p in _PHASE_NODES[n])]
     out = {n: dict(params[n]) for n in nodes}
     if "vision" not in phases:
         out["sim_bridge"]["cameras_enabled"] = False
-    loop_nodes = list(LOOPS[loop])
-    processes = loop_nodes + [n for n in nodes if n not in LOOPS["separate"]]
-    return processes, out
+    return nodes, out
 
 
 def ready_services(nodes: list[str]) -> tuple[str, ...]:
-    """The services of ``nodes`` (processes: a composed one stands for its nodes) the demo
-    waits for before its first goal."""
-    hosted = [h for n in nodes for h in COMPOSED.get(n, (n,))]
-    return tuple(s for n in hosted for s in _NODE_SERVICES.get(n, ()))
+    """The services of ``nodes`` the demo waits for before its first goal."""
+    return tuple(s for n in nodes for s in _NODE_SERVICES.get(n, ()))
 
 
 #: judging of the vision reach against the object's ground truth [m]
@@ -181,23 +157,21 @@ PRESS_FORCE_TOLERANCE = 0.10
 
 
 def run_demo(out_dir: Path, quick: bool = False, realism: str | None = None,
-             tabletop: bool = False, phases: tuple[str, ...] = PHASES,
-             loop: str = DEFAULT_LOOP) -> int:
+             tabletop: bool = False, phases: tuple[str, ...] = PHASES) -> int:
     """Run the whole demo; returns the process exit code (non-zero if a phase failed).
     ``realism``: the simulator's realism preset (None = the shipped config's); ``tabletop``:
     the tabletop task as the last phase (:func:`tabletop_phase`); ``phases``: which of
     :data:`PHASES` to run (the graph leaves out the nodes and cameras only the others need:
-    :func:`phase_graph`); ``loop``: the processes of the torque loop (:data:`LOOPS`)."""
+    :func:`phase_graph`)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     bag_dir = out_dir / "bag"
     results: list[PhaseResult] = []
     with reserve_domain_id() as domain:
         env = ros_environment(domain)
         print(f"demo: ROS_DOMAIN_ID={domain}, output in {out_dir}", flush=True)
-        nodes, params = phase_graph(phases, graph_parameters(realism), loop)
+        nodes, params = phase_graph(phases, graph_parameters(realism))
         if tabletop:
-            nodes, params = phase_graph(PHASES, graph_parameters(realism), loop)
-            nodes, params = nodes + TABLETOP_GRAPH, tabletop_parameters(params)
+            nodes, params = GRAPH + TABLETOP_GRAPH, tabletop_parameters(params)
         with NodeGraph(nodes, params, env=env) as graph:
             recorder = NodeProcess(
                 command=[str(repo_root() / "scripts/record.sh"), "-o", str(bag_dir), "--all"],
@@ -1219,19 +1193,13 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"comma-separated phases to run (default all: {','.join(PHASES)}); "
                          "e.g. --phases bimanual runs the reach, squeeze and coupled transport "
                          "alone, on a graph without cameras")
-    ap.add_argument("--loop", choices=tuple(LOOPS), default=DEFAULT_LOOP,
-                    help="how the simulator, the wrench estimator and the impedance controller "
-                         "run: separate (default, three processes), torque (the estimator and "
-                         "controller in one process, as scripts/graph.sh), robot (all three in "
-                         "one process: about twice as fast, for --phases without vision; the "
-                         "segmenter cannot keep up with it)")
     args = ap.parse_args(argv)
     try:
         phases = parse_phases(args.phases)
     except ValueError as exc:
         ap.error(f"--phases: {exc}")
     out = args.out or repo_root() / "bags" / time.strftime("demo-%Y%m%d-%H%M%S")
-    rc = run_demo(out, args.quick, args.realism, args.tabletop, phases, args.loop)
+    rc = run_demo(out, args.quick, args.realism, args.tabletop, phases)
     (out / "summary.json").write_text(json.dumps({"exit_code": rc}, indent=2))
     return rc
 
