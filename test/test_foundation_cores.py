@@ -214,6 +214,22 @@ def test_cores_do_not_import_ros():
     assert icub_pmp.__version__
 
 
+def test_reserve_domain_id_avoids_the_shells_domain(monkeypatch):
+    """The domain a graph started by hand uses (the shell's ROS_DOMAIN_ID, 42 from
+    scripts/env.sh) is never reserved for a test, even when the search starts right before it:
+    a test there would talk to that graph."""
+    import random
+
+    from icub_pmp.graph import ros_domain
+
+    monkeypatch.setattr(ros_domain, "_SHELL_DOMAIN", "42")
+    monkeypatch.setenv("ROS_DOMAIN_ID", "57")
+    for start in (40, 55):  # the first candidate is start + 2: the shell's, then the env's
+        monkeypatch.setattr(random, "randrange", lambda n, s=start: s)
+        with ros_domain.reserve_domain_id() as did:
+            assert did not in (42, 57) and 1 <= did <= 100
+
+
 def test_reserve_domain_id_lets_the_callers_errors_through():
     """An OSError raised inside ``reserve_domain_id`` (a TimeoutError: a node that did not
     answer) reaches the caller as itself, not as domain_coordinator's "generator didn't stop

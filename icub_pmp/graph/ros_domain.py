@@ -11,10 +11,18 @@ from typing import Iterator
 
 __all__ = ["reserve_domain_id", "ros_environment"]
 
+#: the ROS_DOMAIN_ID of the shell this process came from (scripts/env.sh exports 42 unless the
+#: user exports another): a graph started by hand there (scripts/graph.sh) reserves nothing,
+#: and a test that picked its domain talked to it (a restarted simulator's estimates came with
+#: the hand-started graph's stamps, 60 s where the test's were 3 s; check CI, 2026-12-04)
+_SHELL_DOMAIN = os.environ.get("ROS_DOMAIN_ID", "")
+
 
 @contextlib.contextmanager
 def reserve_domain_id() -> Iterator[int]:
-    """Reserve a ROS_DOMAIN_ID in 1..100 not used by another test process on this machine.
+    """Reserve a ROS_DOMAIN_ID in 1..100 not used by another test process on this machine,
+    nor the shell's own ``ROS_DOMAIN_ID`` (:data:`_SHELL_DOMAIN`: where graphs started by hand
+    run) or the one the environment has now.
 
     The lock of ``domain_coordinator`` (the ros2 test tool): a TCP port ``PORT_BASE + id``
     bound for as long as the domain is in use, starting at a random id so parallel sessions
@@ -25,9 +33,12 @@ def reserve_domain_id() -> Iterator[int]:
     """
     from domain_coordinator.impl import PORT_BASE
 
+    avoid = {v for v in (_SHELL_DOMAIN, os.environ.get("ROS_DOMAIN_ID", "")) if v.isdigit()}
     start = random.randrange(100)
     for k in range(100):
         did = (start + k + 1) % 100 + 1
+        if str(did) in avoid:
+            continue
         lock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         try:
             lock.bind(("", PORT_BASE + did))
