@@ -60,6 +60,15 @@ case "${MODE:-}" in
   ""|free_run|lockstep) ;;
   *) echo "graph.sh: MODE must be free_run or lockstep, got '${MODE}'" >&2; exit 2 ;;
 esac
+# hold the domain's domain_coordinator lock (the TCP port the tests bind to reserve a
+# ROS_DOMAIN_ID, icub_pmp.graph.reserve_domain_id) while the graph runs: a test session then
+# picks another domain instead of talking to this graph
+DOMAIN="${ROS_DOMAIN_ID:-42}"
+if [[ "$DOMAIN" =~ ^[0-9]+$ ]] && (( DOMAIN >= 1 && DOMAIN <= 100 )); then
+  coproc LOCK { exec python3 "$ROOT/scripts/hold_domain_lock.py" "$DOMAIN"; }
+  PIDS+=("$LOCK_PID")
+  read -r -t 10 _ <&"${LOCK[0]}" || true  # "held" (or "taken") once the port is bound
+fi
 for n in $NODES; do
   if [[ ! -x "$ROOT/install/icub_pmp/lib/icub_pmp/$n" ]]; then
     echo "graph.sh: skipping $n (not installed)" >&2
