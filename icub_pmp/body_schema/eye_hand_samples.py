@@ -28,7 +28,7 @@ from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, EyeKinematics, 
 from icub_pmp.kinematics.robot_spec import RobotSpec
 
 __all__ = ["StereoSamples", "stereo_samples", "view_samples", "gaze_samples", "babbled_hands",
-           "perturbed_cameras"]
+           "perturbed_cameras", "gaze_lag_offset"]
 
 
 class StereoSamples(NamedTuple):
@@ -43,6 +43,23 @@ class StereoSamples(NamedTuple):
         """The hand positions (n, 3) [m] in each sample's head frame (eq 12's output)."""
         rel = self.hands - self.heads[:, :3, 3]
         return np.einsum("nij,ni->nj", self.heads[:, :3, :3], rel)
+
+    def head_to_root(self, points_head: np.ndarray) -> np.ndarray:
+        """Points (n, 3) [m] given in each sample's head frame, in root_link."""
+        p = np.asarray(points_head, dtype=float).reshape(-1, 3)
+        return np.einsum("nij,nj->ni", self.heads[:, :3, :3], p) + self.heads[:, :3, 3]
+
+    def projected(self, camera: CameraIntrinsics) -> "StereoSamples":
+        """The same samples with the pixels where cameras of intrinsics ``camera`` at the
+        nominal poses :attr:`poses` see the hands (what the nominal model predicts of what
+        the eyes see)."""
+        rel = self.hands[:, None, :] - self.poses[:, :, :3, 3]  # (n, 2, 3)
+        pc = np.einsum("nsji,nsj->nsi", self.poses[:, :, :3, :3], rel)
+        uv = np.stack([camera.fx * pc[..., 0] / pc[..., 2] + camera.cx,
+                       camera.fy * pc[..., 1] / pc[..., 2] + camera.cy], axis=-1)
+        inputs = self.inputs.copy()
+        inputs[:, :4] = uv.reshape(-1, 4)
+        return self._replace(inputs=inputs)
 
 
 def _seen(Tn: Mapping[str, np.ndarray], rot_left: np.ndarray, h: np.ndarray,
@@ -204,6 +221,13 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
     return hands, postures
 
 
+def gaze_lag_offset(rng: np.random.Generator, lag: float) -> np.ndarray:
+    """Where the gaze fixates relative to the hand it follows: a point (3,) [m] uniform in the
+    ball of radius ``lag`` [m] (the gaze lags the moving hand)."""
+    off = rng.normal(size=3)
+    return off * lag * rng.uniform() ** (1.0 / 3.0) / max(float(np.linalg.norm(off)), 1e-12)
+
+
 def gaze_samples(n: int, seed: int, eyes: EyeKinematics, gaze, hands: np.ndarray,
                  postures: Sequence[Mapping[str, float]], cams: Mapping[str, CameraIntrinsics],
                  rot_left: np.ndarray, noise: float, lag: float = 0.2) -> StereoSamples:
@@ -230,8 +254,7 @@ def gaze_samples(n: int, seed: int, eyes: EyeKinematics, gaze, hands: np.ndarray
         k += 1
         i = int(rng.integers(len(hands)))
         h = hands[i]
-        off = rng.normal(size=3)
-        off *= lag * rng.uniform() ** (1.0 / 3.0) / max(float(np.linalg.norm(off)), 1e-12)
+        off = gaze_lag_offset(rng, lag)
         try:
             sol = gaze.solve(h + off, postures[i])
         except InvalidInput:  # the fixation point is behind the head or too near the eyes

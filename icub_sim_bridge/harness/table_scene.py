@@ -85,13 +85,19 @@ class TableScene:
         for name, p in self._placed.items():
             self.sim.set_object_pose(name, p)
 
-    def render(self) -> SceneFrame:
-        """Render both eyes and the objects' true pixels."""
-        mj = self._mj
+    def render_eyes(self) -> dict[str, np.ndarray]:
+        """Both eyes' images {'left', 'right': (H, W, 3) uint8 RGB} as ``sim_bridge`` publishes
+        them (with the realism's pixel noise), without the objects' masks."""
         images = self._renderer.render(self.sim.data)
         imp = self.sim.imperfections
         if imp is not None:  # realism: pixel noise, as sim_bridge publishes the images
             images = {side: imp.noisy_image(img) for side, img in images.items()}
+        return images
+
+    def render(self) -> SceneFrame:
+        """Render both eyes and the objects' true pixels."""
+        mj = self._mj
+        images = self.render_eyes()
         masks: dict[str, dict[str, np.ndarray]] = {o: {} for o in self._geoms}
         for side in ("left", "right"):
             self._seg.update_scene(self.sim.data, camera=self._eye_cameras[side],
