@@ -68,6 +68,7 @@ Ends with one JSON line. Paper figures are printed beside ours.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -128,11 +129,23 @@ EYES_ONLY_FRACTION = 0.5
 TABLE_REGION = ((-0.50, -0.22, -0.09), (-0.26, 0.18, 0.03))
 #: the map learned from rendered views of the hand (--rendered, decision 0071): gaze samples
 #: to learn from and held-out ones (full, --quick)
-EH_RENDERED, EH_RENDERED_QUICK = (3000, 600), (1000, 300)
-#: the table's far half, from the far placements of bench/vision_reach.py (x -0.46 m) with 4 cm:
-#: half as many babbles again directed there (the 0070 map was 8-18 mm too high there)
-FAR_TABLE_REGION = ((-0.50, -0.22, -0.09), (-0.38, 0.18, 0.03))
+EH_RENDERED, EH_RENDERED_QUICK = (5000, 600), (1000, 300)
+#: the babbles of the rendered map over the table: TABLE_REGION down to 4 cm below the table
+#: top (the table is taken away while the robot babbles, so the table's own points are inside
+#: what the map learned, not at its edge) [m, root_link]
+RENDER_TABLE_REGION = ((-0.50, -0.22, -0.13), (-0.26, 0.18, 0.03))
+#: its far half, from the far placements of bench/vision_reach.py (x -0.46 m) with 4 cm: half as
+#: many babbles again directed there (the 0070 map was 8-18 mm too high there)
+FAR_TABLE_REGION = ((-0.50, -0.22, -0.13), (-0.38, 0.18, 0.03))
 FAR_X = -0.40  # [m] the held-out points beyond this are the figures' far half
+#: the marker on a stick the robot holds (20 cm along the hand frame's x axis from the hand
+#: marker): the hand's own marker is never more than 0.52 m from the head, the table beyond
+#: x = -0.42 is farther from the eyes; the robot knows the stick's length (its body schema)
+TOOL_MARKER = (0.18, -0.02, 0.04)
+#: where the stick's marker babbles over the table (3/4 of its babbles) [m, root_link]
+TOOL_REGION = ((-0.62, -0.25, -0.13), (-0.36, 0.20, 0.03))
+#: the held-out far table for the stick's marker: beyond the hand's reach from the eyes
+FAR_TEST_REGION = ((-0.56, -0.22, -0.09), (-0.40, 0.18, 0.03))
 #: the eye calibration of each realism preset (decision 0057), for triangulation beside the map
 EYE_CALIBRATION = {"icub": "config/eye_calibration/icub_seed0.yaml"}
 PAPER = {"body_rmse_mm": "0.04 (6-DoF industrial arm, seed 002)",
@@ -285,9 +298,9 @@ def rendered_babbles(n: int, seed: int, provider: PinocchioJacobianProvider,
                      arms: tuple[str, ...] = ("right", "left")
                      ) -> tuple[list[dict[str, float]], list[str]]:
     """Babbled postures to render and each one's babbling arm: ``n`` babbles of both arms and
-    the trunk, half over ``TABLE_REGION`` (decision 0070), and ``n // 2`` more over
+    the trunk, half over ``RENDER_TABLE_REGION`` (decision 0070), and ``n // 2`` more over
     ``FAR_TABLE_REGION``."""
-    _, near = babbled_hands(n, seed, provider, arms, region=TABLE_REGION)
+    _, near = babbled_hands(n, seed, provider, arms, region=RENDER_TABLE_REGION)
     _, far = babbled_hands(n // 2, seed + 1, provider, arms, region=FAR_TABLE_REGION,
                            region_fraction=1.0)
     return near + far, [arms[k % len(arms)] for k in range(n)] + [
@@ -307,10 +320,13 @@ def _stats_mm(points: np.ndarray, truth: np.ndarray, far: np.ndarray) -> dict:
 
 def rendered_eye_hand_figures(quick: bool, realism: str, provider: PinocchioJacobianProvider,
                               save_models: str = "", calibration: str = "") -> dict:
-    """The eye-hand map learned from what the eyes see of the hand marker on the simulator's
-    ``realism`` cameras (rendered, detected: :func:`rendered_gaze_samples`), and its held-out
-    errors [mm] in root_link against the marker's true position, over the table region where
-    the robot acts (the gaze following the hand there), beside: triangulation with the eye
+    """The eye-hand map learned from what the eyes see of a marker on the simulator's
+    ``realism`` cameras (rendered, detected: :func:`rendered_gaze_samples`): half the samples
+    of the hand marker (:func:`rendered_babbles`), half of a marker on a held stick
+    (``TOOL_MARKER``, babbles directed over ``TOOL_REGION``: the far table is beyond the
+    hand's reach from the eyes). Held-out errors [mm] in root_link against the marker's true
+    position: ``table`` (the hand marker over ``TABLE_REGION``, far half x <= ``FAR_X``) and
+    ``far`` (the stick's marker over ``FAR_TEST_REGION``), beside: triangulation with the eye
     calibration ``calibration`` (a file; '' = none) and with the nominal cameras, the map of
     decision 0070 (nominal cameras, projected pixels) and a map learned from the same rendered
     babbles with the nominal projection's pixels instead of the detected ones.
@@ -321,75 +337,97 @@ def rendered_eye_hand_figures(quick: bool, realism: str, provider: PinocchioJaco
     from icub_sim_bridge.harness.marker_views import rendered_gaze_samples
     from icub_sim_bridge.harness.table_scene import TableScene
     from icub_sim_bridge.realism_config import RealismConfig
+    from icub_sim_bridge.sim_config import SimConfig
 
     n_train, n_test = EH_RENDERED_QUICK if quick else EH_RENDERED
     evals = EH_EVALS_QUICK if quick else 300
-    scene = TableScene(RealismConfig(preset=realism))
-    nominal = scene.camera
-    try:
-        postures, arms = rendered_babbles(n_train, 310, provider)
-        train = rendered_gaze_samples(scene, n_train, 11, postures, arms, GAZE_LAG)
-        _, test_postures = babbled_hands(n_test, 410, provider, region=TABLE_REGION,
-                                         region_fraction=1.0)
-        test = rendered_gaze_samples(scene, n_test, 12, test_postures,
-                                     [("right", "left")[k % 2] for k in range(n_test)],
-                                     GAZE_LAG)
-    finally:
-        scene.close()
-    rate = len(train.samples.inputs) / train.seconds
-    print(f"rendered {realism}: {len(train.samples.inputs)} samples of {train.renders} stereo "
-          f"renders in {train.seconds:.0f} s ({train.renders / train.seconds:.1f} renders/s, "
-          f"{rate:.1f} samples/s, load {os.getloadavg()[0]:.1f}); held out "
-          f"{len(test.samples.inputs)}", file=sys.stderr)
+    arms = ("right", "left")
+    n_hand = n_train // 2
+    tool_cfg = dataclasses.replace(SimConfig(), hand_marker_offset=TOOL_MARKER)
+    runs = {}
+    for name, cfg in (("hand", None), ("tool", tool_cfg)):
+        scene = TableScene(RealismConfig(preset=realism), cfg)
+        nominal = scene.camera
+        try:
+            if name == "hand":
+                postures, which = rendered_babbles(n_hand, 310, provider)
+                _, test_p = babbled_hands(n_test, 410, provider, region=TABLE_REGION,
+                                          region_fraction=1.0)
+            else:
+                _, postures = babbled_hands(n_train - n_hand, 320, provider, region=TOOL_REGION,
+                                            region_fraction=0.75, offset=TOOL_MARKER)
+                which = [arms[k % 2] for k in range(len(postures))]
+                _, test_p = babbled_hands(n_test, 420, provider, region=FAR_TEST_REGION,
+                                          region_fraction=1.0, offset=TOOL_MARKER)
+            n = n_hand if name == "hand" else n_train - n_hand
+            train = rendered_gaze_samples(scene, n, 11, postures, which, GAZE_LAG)
+            test = rendered_gaze_samples(scene, n_test, 12, test_p,
+                                         [arms[k % 2] for k in range(n_test)], GAZE_LAG)
+        finally:
+            scene.close()
+        runs[name] = (train, test)
+        print(f"rendered {realism}, {name} marker: {len(train.samples.inputs)} samples of "
+              f"{train.renders} stereo renders in {train.seconds:.0f} s "
+              f"({train.renders / train.seconds:.1f} renders/s, "
+              f"{len(train.samples.inputs) / train.seconds:.1f} samples/s, load "
+              f"{os.getloadavg()[0]:.1f}); held out {len(test.samples.inputs)}", file=sys.stderr)
+    renders = sum(r[0].renders for r in runs.values())
+    seconds = sum(r[0].seconds for r in runs.values())
+    s = StereoSamples(*(np.concatenate(f) for f in zip(*(r[0].samples for r in runs.values()))))
     trainer = LmTrainer(LmTrainerConfig(max_evaluations=evals))
-    s = train.samples
     rendered, report = EyeHandMap.train(s.inputs, s.hands_in_head(), "head", trainer=trainer,
                                         camera=camera_setup(nominal))
-    rendered.info.update({"source": "rendered marker views (decision 0071)", "realism": realism,
-                          "renders": train.renders})
+    rendered.info.update({"source": "rendered marker views, hand and stick (decision 0071)",
+                          "realism": realism, "renders": renders})
     same, _ = EyeHandMap.train(s.projected(nominal).inputs, s.hands_in_head(), "head",
                                trainer=trainer, camera=camera_setup(nominal))
-    n_0070 = EH_QUICK[0] if quick else 15000
+    n_0070 = EH_QUICK[0]  # the map vision_reach ran with in decision 0070 (its --quick)
     cams = {"left": nominal, "right": nominal}
     m0070 = projected_eye_hand_map(n_0070, evals, provider, cams, np.eye(3))
     if save_models:
         rendered.save(Path(save_models) / f"eye_hand_rendered_{realism}.npz")
         m0070.save(Path(save_models) / "eye_hand_nominal.npz")
-    t = test.samples
-    far = test.truth[:, 0] <= FAR_X
     tri_nominal = StereoTriangulator(nominal, nominal)
     calib = EyeCalibration.load(calibration) if calibration else EyeCalibration.nominal(nominal)
     tri_calib = StereoTriangulator(*calib.intrinsics(nominal))
+    out = {"realism": realism, "eye_calibration": calibration or None,
+           "render_samples": len(s.inputs), "renders": renders,
+           "renders_per_s": round(renders / seconds, 2),
+           "render_samples_per_s": round(len(s.inputs) / seconds, 2),
+           "map_train_rmse_mm": round(report.rmse * 1e3, 2), "map_0070_samples": n_0070}
+    for test_name, (_, test) in zip(("table", "far"), runs.values()):
+        t = test.samples
+        far = test.truth[:, 0] <= FAR_X
 
-    def triangulated(tri: StereoTriangulator, cal: EyeCalibration) -> np.ndarray:
-        out = []
-        for x, T in zip(t.inputs, t.poses):
-            poses = cal.poses(CameraPoses(T[0], T[1]))
-            out.append(tri.triangulate(tuple(x[:2]), tuple(x[2:4]), poses.T_root_left,
-                                       poses.T_root_right).position)
-        return np.array(out)
+        def triangulated(tri: StereoTriangulator, cal: EyeCalibration, t=t) -> np.ndarray:
+            res = []
+            for x, T in zip(t.inputs, t.poses):
+                poses = cal.poses(CameraPoses(T[0], T[1]))
+                res.append(tri.triangulate(tuple(x[:2]), tuple(x[2:4]), poses.T_root_left,
+                                           poses.T_root_right).position)
+            return np.array(res)
 
-    figures = {
-        "map_rendered": _stats_mm(t.head_to_root(rendered.locate(t.inputs)), test.truth, far),
-        "map_same_babbles_projected": _stats_mm(t.head_to_root(same.locate(t.inputs)),
-                                                test.truth, far),
-        "map_0070": _stats_mm(t.head_to_root(m0070.locate(t.inputs)), test.truth, far),
-        "triangulation_calibrated": _stats_mm(triangulated(tri_calib, calib), test.truth, far),
-        "triangulation_nominal": _stats_mm(triangulated(
-            tri_nominal, EyeCalibration.nominal(nominal)), test.truth, far),
-        "fk_marker": _stats_mm(t.hands, test.truth, far),
-    }
-    for name, f in figures.items():
-        print(f"  table, {realism} cameras, held out ({len(t.inputs)}, {int(far.sum())} far): "
-              f"{name} median {f['median']} mm, p95 {f['p95']}, far half {f['far_median']} "
-              f"(bias {f['bias']}, far {f['far_bias']})", file=sys.stderr)
-    return {"realism": realism, "eye_calibration": calibration or None,
-            "render_samples": len(s.inputs), "render_test_samples": len(t.inputs),
-            "render_test_far": int(far.sum()), "renders": train.renders,
-            "renders_per_s": round(train.renders / train.seconds, 2),
-            "render_samples_per_s": round(rate, 2), "map_train_rmse_mm": round(
-                report.rmse * 1e3, 2), "map_0070_samples": n_0070,
-            **{f"eyehand_table_{k}": v for k, v in figures.items()}}
+        figures = {
+            "map_rendered": _stats_mm(t.head_to_root(rendered.locate(t.inputs)), test.truth,
+                                      far),
+            "map_same_babbles_projected": _stats_mm(t.head_to_root(same.locate(t.inputs)),
+                                                    test.truth, far),
+            "map_0070": _stats_mm(t.head_to_root(m0070.locate(t.inputs)), test.truth, far),
+            "triangulation_calibrated": _stats_mm(triangulated(tri_calib, calib), test.truth,
+                                                  far),
+            "triangulation_nominal": _stats_mm(triangulated(
+                tri_nominal, EyeCalibration.nominal(nominal)), test.truth, far),
+            "fk_marker": _stats_mm(t.hands, test.truth, far),
+        }
+        dist = np.linalg.norm(t.hands - t.heads[:, :3, 3], axis=1)
+        for name, f in figures.items():
+            print(f"  {test_name}, {realism} cameras, held out ({len(t.inputs)}, "
+                  f"{int(far.sum())} x <= {FAR_X}, {dist.min():.2f}-{dist.max():.2f} m from "
+                  f"the head): {name} median {f['median']} mm, p95 {f['p95']}, far half "
+                  f"{f['far_median']} (bias {f['bias']}, far {f['far_bias']})", file=sys.stderr)
+        out.update({f"eyehand_{test_name}_{k}": v for k, v in figures.items()})
+        out[f"eyehand_{test_name}_samples"] = len(t.inputs)
+    return out
 
 
 def eye_hand_figures(quick: bool, truth: PinocchioJacobianProvider, test_hand: np.ndarray,

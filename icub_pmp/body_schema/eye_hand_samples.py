@@ -177,7 +177,8 @@ def view_samples(n: int, seed: int, eyes: EyeKinematics, T_root_head: np.ndarray
 
 def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "left"),
                   trunk: bool = True, region: tuple[Sequence[float], Sequence[float]] | None = None,
-                  region_fraction: float = 0.5, spec: RobotSpec | None = None
+                  region_fraction: float = 0.5, spec: RobotSpec | None = None,
+                  offset: Sequence[float] | None = None
                   ) -> tuple[np.ndarray, list[dict[str, float]]]:
     """Motor babbling of the hands for the eye-hand map: ``n`` postures, each of one of
     ``arms`` (in turn) with its 7 joints (and the 3 trunk joints with ``trunk``, as
@@ -187,7 +188,9 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
     it (the others are drawn again: babbling directed at that region). Returns the hand
     positions (n, 3) [m] in root_link (``provider``'s forward kinematics, e.g.
     :class:`~icub_pmp.pmp.pinocchio_provider.PinocchioJacobianProvider`) and the postures
-    {joint: rad} (the trunk moves the head the gaze looks from).
+    {joint: rad} (the trunk moves the head the gaze looks from). With ``offset`` (3,) [m] the
+    babbled point is that point of the hand frame (a marker, a held tool's tip), not its
+    origin.
 
     Raises :class:`InvalidInput` for no arm, ``n`` < 1, a fraction outside [0, 1] or a region
     the hands do not reach (none of 1,000 babbles per wanted posture in it)."""
@@ -210,7 +213,11 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
         for _ in range(1000):
             q = q0.copy()
             q[idx] = rng.uniform(provider.lower[idx], provider.upper[idx])
-            hand = provider.positions(q, [spec.hand_frame(arm)])[0]
+            if offset is None:
+                hand = provider.positions(q, [spec.hand_frame(arm)])[0]
+            else:
+                kin = provider.kinematics(q, [spec.hand_frame(arm)])
+                hand = kin.positions[0] + kin.rotations[0] @ np.asarray(offset, dtype=float)
             if k >= n_region or bool(np.all((hand >= lo) & (hand <= hi))):
                 break
         else:

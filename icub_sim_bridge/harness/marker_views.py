@@ -105,14 +105,16 @@ class RenderedGazeSamples(NamedTuple):
 
 def rendered_gaze_samples(scene, n: int, seed: int, postures: Sequence[Mapping[str, float]],
                           arms: Sequence[str], lag: float = 0.2, gate_px: float = 40.0,
-                          min_fill: float = 0.5, max_tries: int | None = None
-                          ) -> RenderedGazeSamples:
+                          min_fill: float = 0.5, max_tries: int | None = None,
+                          table: bool = False) -> RenderedGazeSamples:
     """``n`` eye-hand samples of ``scene`` (a :class:`~.table_scene.TableScene`, its realism's
     cameras) while the gaze follows the babbling hands: a posture of ``postures`` (dicts
     {joint: rad}, e.g. :func:`~icub_pmp.body_schema.babbled_hands`, the hand of ``arms[i]``
     babbling) drawn at random, the gaze controller fixating a point within ``lag`` [m] of its
     marker (:func:`gaze_lag_offset`), both eyes rendered with the objects out of view, the
-    marker detected in both images.
+    marker detected in both images. Without ``table`` the table is taken away while the robot
+    babbles (as a robot babbles before the table is put in front of it): the hand is then seen
+    below the table top too, where the table's own points are at use.
 
     What the robot knows, not the simulator's truth: the eye angles, the marker (forward
     kinematics + ``hand_marker_offset``) and the head frame come from the encoders' joint
@@ -143,38 +145,42 @@ def rendered_gaze_samples(scene, n: int, seed: int, postures: Sequence[Mapping[s
     far = {o: OUT_OF_VIEW for o in sim.object_names}
     rows: list[tuple] = []
     tries = renders = 0
-    while len(rows) < n and tries < (max_tries or 4 * n):
-        tries += 1
-        i = int(rng.integers(len(postures)))
-        arm, q = arms[i], dict(postures[i])
-        frame = spec.hand_frame(arm)
-        p_cmd = _marker(model, q, frame, offset)
-        try:
-            sol = gaze.solve(p_cmd + gaze_lag_offset(rng, lag), q)
-        except IcubPmpError:  # behind the head or too near the eyes
-            continue
-        q.update(zip(_NECK, map(float, sol.neck)))
-        q.update(zip(_EYES, map(float, sol.eyes)))
-        scene.pose(q, far)
-        images = scene.render_eyes()
-        renders += 1
-        js = dict(zip(sim.joint_names, sim.joint_state().position.tolist()))  # the encoders
-        p = _marker(model, js, frame, offset)
-        poses = scene.head.poses(js)
-        uv = []
-        for side, T in (("left", poses.T_root_left), ("right", poses.T_root_right)):
-            depth = float((T[:3, :3].T @ (p - T[:3, 3]))[2])
-            if depth <= 0.05:
-                break
-            d = detector.detect_near(images[side], tuple(project_point(T, p, nominal)), gate_px)
-            if not d.found or d.area < min_fill * np.pi * (nominal.fx * radius / depth) ** 2:
-                break
-            uv += [d.u, d.v]
-        if len(uv) < 4:
-            continue
-        eyes = [js[j] for j in _EYES]
-        rows.append((np.r_[uv, eyes], p, np.stack([poses.T_root_left, poses.T_root_right]),
-                     scene.head.head_pose(js), sim.data.geom_xpos[mj_ids[arm]].copy()))
+    scene.table_away(not table)
+    try:
+        while len(rows) < n and tries < (max_tries or 4 * n):
+            tries += 1
+            i = int(rng.integers(len(postures)))
+            arm, q = arms[i], dict(postures[i])
+            frame = spec.hand_frame(arm)
+            p_cmd = _marker(model, q, frame, offset)
+            try:
+                sol = gaze.solve(p_cmd + gaze_lag_offset(rng, lag), q)
+            except IcubPmpError:  # behind the head or too near the eyes
+                continue
+            q.update(zip(_NECK, map(float, sol.neck)))
+            q.update(zip(_EYES, map(float, sol.eyes)))
+            scene.pose(q, far)
+            images = scene.render_eyes()
+            renders += 1
+            js = dict(zip(sim.joint_names, sim.joint_state().position.tolist()))  # the encoders
+            p = _marker(model, js, frame, offset)
+            poses = scene.head.poses(js)
+            uv = []
+            for side, T in (("left", poses.T_root_left), ("right", poses.T_root_right)):
+                depth = float((T[:3, :3].T @ (p - T[:3, 3]))[2])
+                if depth <= 0.05:
+                    break
+                d = detector.detect_near(images[side], tuple(project_point(T, p, nominal)), gate_px)
+                if not d.found or d.area < min_fill * np.pi * (nominal.fx * radius / depth) ** 2:
+                    break
+                uv += [d.u, d.v]
+            if len(uv) < 4:
+                continue
+            eyes = [js[j] for j in _EYES]
+            rows.append((np.r_[uv, eyes], p, np.stack([poses.T_root_left, poses.T_root_right]),
+                         scene.head.head_pose(js), sim.data.geom_xpos[mj_ids[arm]].copy()))
+    finally:
+        scene.table_away(False)
     cols = [np.array([r[k] for r in rows], dtype=float).reshape((len(rows),) + shape)
             for k, shape in enumerate(((7,), (3,), (2, 4, 4), (4, 4), (3,)))]
     return RenderedGazeSamples(StereoSamples(*cols[:4]), cols[4], renders,
