@@ -193,7 +193,7 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
     origin.
 
     Raises :class:`InvalidInput` for no arm, ``n`` < 1, a fraction outside [0, 1] or a region
-    the hands do not reach (none of 1,000 babbles per wanted posture in it)."""
+    the hands do not reach (none of 5,000 babbles per wanted posture in it)."""
     spec = spec or RobotSpec.load()
     if int(n) < 1 or not arms or not 0.0 <= region_fraction <= 1.0:
         raise InvalidInput(f"babbled_hands: need n >= 1, an arm and a region fraction in "
@@ -210,7 +210,7 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
         arm = arms[k % len(arms)]
         joints = spec.arm_joints(arm) + (spec.torso_joints if trunk else ())
         idx = [names.index(j) for j in joints]
-        for _ in range(1000):
+        for _ in range(5000):
             q = q0.copy()
             q[idx] = rng.uniform(provider.lower[idx], provider.upper[idx])
             if offset is None:
