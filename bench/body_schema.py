@@ -55,13 +55,17 @@ null (the quick run does not start the graph).
   1.6 mm; decision 0054).
 - Rendered (``--eye-hand-only --rendered``, decision 0071): the map learned from what the
   eyes of the simulator's ``--realism`` cameras (default ``icub``: focal, principal point and
-  mounting off camera_info's) see of the hand marker: the babbles above plus half as many over
-  the table's far half (``FAR_TABLE_REGION``), the gaze following the hand, both eyes rendered
-  and the marker detected (``rendered_gaze_samples``), eye angles and the marker's position
-  from the encoders and the nominal forward kinematics; held-out babbles over the table:
-  ``eyehand_table_*`` (median, p95, far half x <= ``FAR_X``, bias) [mm] against the marker's
-  true position, beside triangulation (calibrated and nominal), the 0070 map (nominal cameras,
-  projected pixels) and a map from the same babbles' projected pixels.
+  mounting off camera_info's) see of a marker, the table taken away while babbling: half the
+  samples of the hand marker (the babbles above, down to 4 cm below the table top, plus half
+  as many over the table's far half ``FAR_TABLE_REGION``), half of a marker on a held 30 cm
+  stick (``TOOL_MARKER``, over ``TOOL_REGION``: the far table is farther from the eyes than the
+  hand reaches); the gaze following the marker, both eyes rendered and the marker detected
+  (``rendered_gaze_samples``), eye angles and the marker's position from the encoders and the
+  nominal forward kinematics. Held out: ``eyehand_table_*`` (the hand marker over the table)
+  and ``eyehand_far_*`` (the stick over the far table): median, p95, far half x <= ``FAR_X``,
+  bias [mm] against the marker's true position, beside triangulation (calibrated and
+  nominal), the 0070 map (nominal cameras, projected pixels) and a map from the same babbles'
+  projected pixels; ``renders_per_s``, ``render_samples_per_s``.
 Ends with one JSON line. Paper figures are printed beside ours.
 """
 
