@@ -116,3 +116,13 @@ def test_detect_near_picks_the_expected_marker():
     assert not det.detect_near(img, (130.0, 200.0), 30.0).found
     with pytest.raises(InvalidInput):
         det.detect_near(img, (float("nan"), 1.0), 30.0)
+
+
+def test_rendered_gaze_samples_bad_input(rendered):
+    """Postures without one babbling arm each: a clear error naming both counts."""
+    from icub_pmp.errors import IcubPmpError
+    from icub_sim_bridge.harness.marker_views import rendered_gaze_samples
+
+    scene = rendered[0]
+    with pytest.raises(IcubPmpError, match="one arm per posture"):
+        rendered_gaze_samples(scene, 5, 0, [{"r_elbow": 1.0}] * 3, ["right"])
