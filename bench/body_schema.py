@@ -8,6 +8,8 @@ eye-hand map against geometric triangulation.
     scripts/env.sh python bench/body_schema.py --quick --plot   # + PNGs in bench/out/
     scripts/env.sh python bench/body_schema.py --quick --save-models data/body_schema
                                                                 # + the learned models (.npz)
+    scripts/env.sh python bench/body_schema.py --eye-hand-only --rendered --quick \
+        --save-models data/body_schema      # the eye-hand map from the icub cameras' renders
 
 Data: babbles of the right arm (7 joints uniform within the URDF limits, torso and left arm at
 rest) with the hand (``r_hand_dh_frame``) from pinocchio forward kinematics, held-out test set
@@ -51,12 +53,26 @@ null (the quick run does not start the graph).
   ``adapt_samples`` is the fewest new babbles that bring the held-out error back within the
   error goal (``adapt_goal_mm``: 2 mm, or 1.25x the model's own error when that is above
   1.6 mm; decision 0054).
+- Rendered (``--eye-hand-only --rendered``, decision 0071): the map learned from what the
+  eyes of the simulator's ``--realism`` cameras (default ``icub``: focal, principal point and
+  mounting off camera_info's) see of a marker, the table taken away while babbling: half the
+  samples of the hand marker (the babbles above, down to 4 cm below the table top, plus half
+  as many over the table's far half ``FAR_TABLE_REGION``), half of a marker on a held 30 cm
+  stick (``TOOL_MARKER``, over ``TOOL_REGION``: the far table is farther from the eyes than the
+  hand reaches); the gaze following the marker, both eyes rendered and the marker detected
+  (``rendered_gaze_samples``), eye angles and the marker's position from the encoders and the
+  nominal forward kinematics. Held out: ``eyehand_table_*`` (the hand marker over the table)
+  and ``eyehand_far_*`` (the stick over the far table): median, p95, far half x <= ``FAR_X``,
+  bias [mm] against the marker's true position, beside triangulation (calibrated and
+  nominal), the 0070 map (nominal cameras, projected pixels) and a map from the same babbles'
+  projected pixels; ``renders_per_s``, ``render_samples_per_s``.
 Ends with one JSON line. Paper figures are printed beside ours.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -115,6 +131,29 @@ EYES_ONLY_FRACTION = 0.5
 #: the cylinder's placements with 4 cm around, from the table top (-0.09) to its top (+0.03);
 #: half the babbles are directed there (the hand over the table where the robot acts)
 TABLE_REGION = ((-0.50, -0.22, -0.09), (-0.26, 0.18, 0.03))
+#: the map learned from rendered views of the hand (--rendered, decision 0071): gaze samples
+#: to learn from and held-out ones (full, --quick)
+EH_RENDERED, EH_RENDERED_QUICK = (5000, 600), (1000, 300)
+#: the babbles of the rendered map over the table: TABLE_REGION down to 4 cm below the table
+#: top (the table is taken away while the robot babbles, so the table's own points are inside
+#: what the map learned, not at its edge) [m, root_link]
+RENDER_TABLE_REGION = ((-0.50, -0.22, -0.13), (-0.26, 0.18, 0.03))
+#: its far half, from the far placements of bench/vision_reach.py (x -0.46 m) with 4 cm: half as
+#: many babbles again directed there (the 0070 map was 8-18 mm too high there)
+FAR_TABLE_REGION = ((-0.50, -0.22, -0.13), (-0.38, 0.18, 0.03))
+FAR_X = -0.40  # [m] the held-out points beyond this are the figures' far half
+#: the marker on a stick the robot holds (30 cm along the hand frame's x axis from the hand
+#: marker): the hand's own marker is never more than 0.52 m from the head, while the table at
+#: x -0.46 is 0.55 m from the head at rest and 0.63 m with the trunk leaning back as in
+#: bench/vision_reach.py (-20 deg), its far edge 0.77 m; the robot knows the stick's length
+#: (its body schema)
+TOOL_MARKER = (0.28, -0.02, 0.04)
+#: where the stick's marker babbles over the table (3/4 of its babbles) [m, root_link]
+TOOL_REGION = ((-0.70, -0.25, -0.13), (-0.36, 0.20, 0.03))
+#: the held-out far table for the stick's marker: beyond the hand's reach from the eyes
+FAR_TEST_REGION = ((-0.56, -0.22, -0.09), (-0.40, 0.18, 0.03))
+#: the eye calibration of each realism preset (decision 0057), for triangulation beside the map
+EYE_CALIBRATION = {"icub": "config/eye_calibration/icub_seed0.yaml"}
 PAPER = {"body_rmse_mm": "0.04 (6-DoF industrial arm, seed 002)",
          "eyehand_err_mm_mean": "0.31 (x, y; force paper Sect. 4)",
          "eyehand_err_mm_std": "5.5 x/y, about 11 z"}
@@ -182,6 +221,37 @@ def table_points(n: int, seed: int) -> np.ndarray:
     return rng.uniform(TABLE_REGION[0], TABLE_REGION[1], size=(n, 3))
 
 
+def camera_setup(cam: CameraIntrinsics) -> dict[str, float]:
+    """The camera setup a map names (what the segmenter checks when it loads it)."""
+    return {"width": cam.width, "height": cam.height, "fx": cam.fx, "fy": cam.fy}
+
+
+def projected_eye_hand_map(n_train: int, evals: int, provider: PinocchioJacobianProvider,
+                           cams, rot: np.ndarray) -> EyeHandMap:
+    """The eye-hand map of decision 0070: learned from ``n_train`` gaze samples of babbled
+    hands (both arms and the trunk, half over ``TABLE_REGION``) projected into the cameras
+    ``cams`` (left rotation ``rot``), plus ``EYES_ONLY_FRACTION`` as many of the eyes alone
+    fixating other babbles with the head at rest; ``evals`` LM evaluations at most."""
+    model = provider.icub
+    eyes = EyeKinematics.from_model(model)
+    gaze = GazeController(model=model)
+    rest = RobotSpec.load().posture("rest")
+    hands, postures = babbled_hands(n_train, 300, provider, region=TABLE_REGION)
+    moving = gaze_samples(n_train, 1, eyes, gaze, hands, postures, cams, rot, 0.3, GAZE_LAG)
+    # and the eyes alone following the hand, the head still (the gaze controller keeps the
+    # neck while the target stays within its activation angle): other babbles, head at rest
+    T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
+    q_head, _ = gaze.configuration(rest)
+    n_fix = int(round(EYES_ONLY_FRACTION * n_train))
+    still = stereo_samples(n_fix, 4, eyes, T_root_head, babbled_hands(
+        n_fix, 301, provider, trunk=False)[0], cams, rot, 0.3, gaze, q_head)
+    train = StereoSamples(*(np.concatenate(f) for f in zip(moving, still)))
+    m, _ = EyeHandMap.train(train.inputs, train.hands_in_head(), "head",
+                            trainer=LmTrainer(LmTrainerConfig(max_evaluations=evals)),
+                            camera=camera_setup(CameraIntrinsics()))
+    return m
+
+
 def eye_hand_vs_triangulation(n_train: int, n_test: int, perturbed: bool, evals: int,
                               provider: PinocchioJacobianProvider, fixation_hands: np.ndarray,
                               save: str = "") -> dict:
@@ -200,20 +270,9 @@ def eye_hand_vs_triangulation(n_train: int, n_test: int, perturbed: bool, evals:
         cams, rot = {"left": nominal, "right": nominal}, np.eye(3)
     gaze = GazeController(model=model)
     rest = RobotSpec.load().posture("rest")
-    hands, postures = babbled_hands(n_train, 300, provider, region=TABLE_REGION)
-    moving = gaze_samples(n_train, 1, eyes, gaze, hands, postures, cams, rot, 0.3, GAZE_LAG)
-    # and the eyes alone following the hand, the head still (the gaze controller keeps the
-    # neck while the target stays within its activation angle): other babbles, head at rest
     T_root_head = model.frame_pose(model.posture("rest"), "head").homogeneous
     q_head, _ = gaze.configuration(rest)
-    n_fix = int(round(EYES_ONLY_FRACTION * n_train))
-    still = stereo_samples(n_fix, 4, eyes, T_root_head, babbled_hands(
-        n_fix, 301, provider, trunk=False)[0], cams, rot, 0.3, gaze, q_head)
-    train = StereoSamples(*(np.concatenate(f) for f in zip(moving, still)))
-    m, _ = EyeHandMap.train(train.inputs, train.hands_in_head(), "head",
-                            trainer=LmTrainer(LmTrainerConfig(max_evaluations=evals)),
-                            camera={"width": nominal.width, "height": nominal.height,
-                                    "fx": nominal.fx, "fy": nominal.fy})
+    m = projected_eye_hand_map(n_train, evals, provider, cams, rot)
     if save:
         m.save(save)
     h_test, p_test = babbled_hands(n_test, 400, provider, region=TABLE_REGION)
@@ -238,6 +297,142 @@ def eye_hand_vs_triangulation(n_train: int, n_test: int, perturbed: bool, evals:
                      "tri_std": err_tri.std(axis=0).round(2).tolist(),
                      "tri_rmse": float(np.sqrt(np.mean(norm_tri ** 2))),
                      "tri_median": float(np.median(norm_tri))}
+    return out
+
+
+def rendered_babbles(n: int, seed: int, provider: PinocchioJacobianProvider,
+                     arms: tuple[str, ...] = ("right", "left")
+                     ) -> tuple[list[dict[str, float]], list[str]]:
+    """Babbled postures to render and each one's babbling arm: ``n`` babbles of both arms and
+    the trunk, half over ``RENDER_TABLE_REGION`` (decision 0070), and ``n // 2`` more over
+    ``FAR_TABLE_REGION``."""
+    _, near = babbled_hands(n, seed, provider, arms, region=RENDER_TABLE_REGION)
+    _, far = babbled_hands(n // 2, seed + 1, provider, arms, region=FAR_TABLE_REGION,
+                           region_fraction=1.0)
+    return near + far, [arms[k % len(arms)] for k in range(n)] + [
+        arms[k % len(arms)] for k in range(n // 2)]
+
+
+def _stats_mm(points: np.ndarray, truth: np.ndarray, far: np.ndarray) -> dict:
+    """Median, p95 and far-half median [mm] of the distances between ``points`` and
+    ``truth`` (n, 3) [m]; the mean error vector [mm] too (a bias)."""
+    d = points - truth
+    e = np.linalg.norm(d, axis=1) * 1e3
+    return {"median": round(float(np.median(e)), 2), "p95": round(float(np.percentile(e, 95)), 2),
+            "far_median": round(float(np.median(e[far])), 2) if far.any() else None,
+            "bias": (d.mean(axis=0) * 1e3).round(2).tolist(),
+            "far_bias": (d[far].mean(axis=0) * 1e3).round(2).tolist() if far.any() else None}
+
+
+def rendered_eye_hand_figures(quick: bool, realism: str, provider: PinocchioJacobianProvider,
+                              save_models: str = "", calibration: str = "") -> dict:
+    """The eye-hand map learned from what the eyes see of a marker on the simulator's
+    ``realism`` cameras (rendered, detected: :func:`rendered_gaze_samples`): half the samples
+    of the hand marker (:func:`rendered_babbles`), half of a marker on a held stick
+    (``TOOL_MARKER``, babbles directed over ``TOOL_REGION``: the far table is beyond the
+    hand's reach from the eyes). Held-out errors [mm] in root_link against the marker's true
+    position: ``table`` (the hand marker over ``TABLE_REGION``, far half x <= ``FAR_X``) and
+    ``far`` (the stick's marker over ``FAR_TEST_REGION``), beside: triangulation with the eye
+    calibration ``calibration`` (a file; '' = none) and with the nominal cameras, the map of
+    decision 0070 (nominal cameras, projected pixels) and a map learned from the same rendered
+    babbles with the nominal projection's pixels instead of the detected ones.
+    ``save_models``: write ``eye_hand_rendered_<realism>.npz`` and ``eye_hand_nominal.npz``
+    there."""
+    from icub_pmp.vision.eye_calibration import EyeCalibration
+    from icub_pmp.vision.head_cameras import CameraPoses
+    from icub_sim_bridge.harness.marker_views import rendered_gaze_samples
+    from icub_sim_bridge.harness.table_scene import TableScene
+    from icub_sim_bridge.realism_config import RealismConfig
+    from icub_sim_bridge.sim_config import SimConfig
+
+    n_train, n_test = EH_RENDERED_QUICK if quick else EH_RENDERED
+    evals = EH_EVALS_QUICK if quick else 300
+    arms = ("right", "left")
+    n_hand = n_train // 2
+    tool_cfg = dataclasses.replace(SimConfig(), hand_marker_offset=TOOL_MARKER)
+    runs = {}
+    for name, cfg in (("hand", None), ("tool", tool_cfg)):
+        scene = TableScene(RealismConfig(preset=realism), cfg)
+        nominal = scene.camera
+        try:
+            if name == "hand":
+                postures, which = rendered_babbles(n_hand, 310, provider)
+                _, test_p = babbled_hands(n_test, 410, provider, region=TABLE_REGION,
+                                          region_fraction=1.0)
+            else:
+                _, postures = babbled_hands(n_train - n_hand, 320, provider, region=TOOL_REGION,
+                                            region_fraction=0.75, offset=TOOL_MARKER)
+                which = [arms[k % 2] for k in range(len(postures))]
+                _, test_p = babbled_hands(n_test, 420, provider, region=FAR_TEST_REGION,
+                                          region_fraction=1.0, offset=TOOL_MARKER)
+            n = n_hand if name == "hand" else n_train - n_hand
+            train = rendered_gaze_samples(scene, n, 11, postures, which, GAZE_LAG)
+            test = rendered_gaze_samples(scene, n_test, 12, test_p,
+                                         [arms[k % 2] for k in range(n_test)], GAZE_LAG)
+        finally:
+            scene.close()
+        runs[name] = (train, test)
+        print(f"rendered {realism}, {name} marker: {len(train.samples.inputs)} samples of "
+              f"{train.renders} stereo renders in {train.seconds:.0f} s "
+              f"({train.renders / train.seconds:.1f} renders/s, "
+              f"{len(train.samples.inputs) / train.seconds:.1f} samples/s, load "
+              f"{os.getloadavg()[0]:.1f}); held out {len(test.samples.inputs)}", file=sys.stderr)
+    renders = sum(r[0].renders for r in runs.values())
+    seconds = sum(r[0].seconds for r in runs.values())
+    s = StereoSamples(*(np.concatenate(f) for f in zip(*(r[0].samples for r in runs.values()))))
+    trainer = LmTrainer(LmTrainerConfig(max_evaluations=evals))
+    rendered, report = EyeHandMap.train(s.inputs, s.hands_in_head(), "head", trainer=trainer,
+                                        camera=camera_setup(nominal))
+    rendered.info.update({"source": "rendered marker views, hand and stick (decision 0071)",
+                          "realism": realism, "renders": renders})
+    same, _ = EyeHandMap.train(s.projected(nominal).inputs, s.hands_in_head(), "head",
+                               trainer=trainer, camera=camera_setup(nominal))
+    n_0070 = EH_QUICK[0]  # the map vision_reach ran with in decision 0070 (its --quick)
+    cams = {"left": nominal, "right": nominal}
+    m0070 = projected_eye_hand_map(n_0070, evals, provider, cams, np.eye(3))
+    if save_models:
+        rendered.save(Path(save_models) / f"eye_hand_rendered_{realism}.npz")
+        m0070.save(Path(save_models) / "eye_hand_nominal.npz")
+    tri_nominal = StereoTriangulator(nominal, nominal)
+    calib = EyeCalibration.load(calibration) if calibration else EyeCalibration.nominal(nominal)
+    tri_calib = StereoTriangulator(*calib.intrinsics(nominal))
+    out = {"realism": realism, "eye_calibration": calibration or None,
+           "render_samples": len(s.inputs), "renders": renders,
+           "renders_per_s": round(renders / seconds, 2),
+           "render_samples_per_s": round(len(s.inputs) / seconds, 2),
+           "map_train_rmse_mm": round(report.rmse * 1e3, 2), "map_0070_samples": n_0070}
+    for test_name, (_, test) in zip(("table", "far"), runs.values()):
+        t = test.samples
+        far = test.truth[:, 0] <= FAR_X
+
+        def triangulated(tri: StereoTriangulator, cal: EyeCalibration, t=t) -> np.ndarray:
+            res = []
+            for x, T in zip(t.inputs, t.poses):
+                poses = cal.poses(CameraPoses(T[0], T[1]))
+                res.append(tri.triangulate(tuple(x[:2]), tuple(x[2:4]), poses.T_root_left,
+                                           poses.T_root_right).position)
+            return np.array(res)
+
+        figures = {
+            "map_rendered": _stats_mm(t.head_to_root(rendered.locate(t.inputs)), test.truth,
+                                      far),
+            "map_same_babbles_projected": _stats_mm(t.head_to_root(same.locate(t.inputs)),
+                                                    test.truth, far),
+            "map_0070": _stats_mm(t.head_to_root(m0070.locate(t.inputs)), test.truth, far),
+            "triangulation_calibrated": _stats_mm(triangulated(tri_calib, calib), test.truth,
+                                                  far),
+            "triangulation_nominal": _stats_mm(triangulated(
+                tri_nominal, EyeCalibration.nominal(nominal)), test.truth, far),
+            "fk_marker": _stats_mm(t.hands, test.truth, far),
+        }
+        dist = np.linalg.norm(t.hands - t.heads[:, :3, 3], axis=1)
+        for name, f in figures.items():
+            print(f"  {test_name}, {realism} cameras, held out ({len(t.inputs)}, "
+                  f"{int(far.sum())} x <= {FAR_X}, {dist.min():.2f}-{dist.max():.2f} m from "
+                  f"the head): {name} median {f['median']} mm, p95 {f['p95']}, far half "
+                  f"{f['far_median']} (bias {f['bias']}, far {f['far_bias']})", file=sys.stderr)
+        out.update({f"eyehand_{test_name}_{k}": v for k, v in figures.items()})
+        out[f"eyehand_{test_name}_samples"] = len(t.inputs)
     return out
 
 
@@ -298,8 +493,33 @@ def main() -> None:
                     help="+ error vs samples and hidden sizes (each trained within the budget)")
     ap.add_argument("--eye-hand-only", action="store_true",
                     help="only the eye-hand map's figures (and models with --save-models)")
+    ap.add_argument("--rendered", action="store_true",
+                    help="with --eye-hand-only: learn the map from the hand marker rendered and "
+                         "detected in both eyes on the --realism cameras (decision 0071); "
+                         "--save-models writes DIR/eye_hand_rendered_<realism>.npz")
+    ap.add_argument("--realism", choices=("ideal", "icub"), default="icub",
+                    help="the simulator's cameras for --rendered (default icub, the shipped "
+                         "robot)")
+    ap.add_argument("--eye-calibration", default=None, metavar="FILE",
+                    help="the eye calibration triangulation uses beside the --rendered map "
+                         "(default: the preset's, config/eye_calibration/)")
     args = ap.parse_args()
     q = args.quick
+    if args.rendered and not args.eye_hand_only:
+        ap.error("--rendered goes with --eye-hand-only")
+    if args.rendered:
+        calib = (args.eye_calibration if args.eye_calibration is not None
+                 else EYE_CALIBRATION.get(args.realism, ""))
+        if calib and not Path(calib).is_file():
+            ap.error(f"--eye-calibration: no file {calib}")
+        if args.save_models:
+            Path(args.save_models).mkdir(parents=True, exist_ok=True)
+        load_start = os.getloadavg()
+        out = rendered_eye_hand_figures(q, args.realism, PinocchioJacobianProvider(),
+                                        args.save_models, calib)
+        print(json.dumps({**out, "load_avg": [round(load_start[0], 1),
+                                              round(os.getloadavg()[0], 1)]}))
+        return
     if args.eye_hand_only:
         truth = PinocchioJacobianProvider()
         load_start = os.getloadavg()

@@ -285,8 +285,9 @@ def main(argv: list[str] | None = None) -> int:
                          "this robot's eye calibration; default: config/sim_bridge.yaml's)")
     ap.add_argument("--eye-hand-map", default="", metavar="FILE",
                     help="the segmenter's 3-D target from this learned eye-hand map (.npz, e.g. "
-                         "bench/body_schema.py --save-models DIR writes DIR/eye_hand_nominal.npz) "
-                         "instead of triangulation")
+                         "bench/body_schema.py --eye-hand-only --rendered --save-models DIR "
+                         "writes DIR/eye_hand_rendered_icub.npz for the icub cameras) instead of "
+                         "triangulation")
     ap.add_argument("--seed", type=int, default=23, help="of the placements and motions")
     ap.add_argument("--only", type=int, nargs="+", default=None, metavar="K",
                     help="run only these trial indices (0-based) of the seed's trials, e.g. to "

@@ -28,7 +28,7 @@ from icub_pmp.kinematics.eye_kinematics import CameraIntrinsics, EyeKinematics, 
 from icub_pmp.kinematics.robot_spec import RobotSpec
 
 __all__ = ["StereoSamples", "stereo_samples", "view_samples", "gaze_samples", "babbled_hands",
-           "perturbed_cameras"]
+           "perturbed_cameras", "gaze_lag_offset"]
 
 
 class StereoSamples(NamedTuple):
@@ -43,6 +43,23 @@ class StereoSamples(NamedTuple):
         """The hand positions (n, 3) [m] in each sample's head frame (eq 12's output)."""
         rel = self.hands - self.heads[:, :3, 3]
         return np.einsum("nij,ni->nj", self.heads[:, :3, :3], rel)
+
+    def head_to_root(self, points_head: np.ndarray) -> np.ndarray:
+        """Points (n, 3) [m] given in each sample's head frame, in root_link."""
+        p = np.asarray(points_head, dtype=float).reshape(-1, 3)
+        return np.einsum("nij,nj->ni", self.heads[:, :3, :3], p) + self.heads[:, :3, 3]
+
+    def projected(self, camera: CameraIntrinsics) -> "StereoSamples":
+        """The same samples with the pixels where cameras of intrinsics ``camera`` at the
+        nominal poses :attr:`poses` see the hands (what the nominal model predicts of what
+        the eyes see)."""
+        rel = self.hands[:, None, :] - self.poses[:, :, :3, 3]  # (n, 2, 3)
+        pc = np.einsum("nsji,nsj->nsi", self.poses[:, :, :3, :3], rel)
+        uv = np.stack([camera.fx * pc[..., 0] / pc[..., 2] + camera.cx,
+                       camera.fy * pc[..., 1] / pc[..., 2] + camera.cy], axis=-1)
+        inputs = self.inputs.copy()
+        inputs[:, :4] = uv.reshape(-1, 4)
+        return self._replace(inputs=inputs)
 
 
 def _seen(Tn: Mapping[str, np.ndarray], rot_left: np.ndarray, h: np.ndarray,
@@ -160,7 +177,8 @@ def view_samples(n: int, seed: int, eyes: EyeKinematics, T_root_head: np.ndarray
 
 def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "left"),
                   trunk: bool = True, region: tuple[Sequence[float], Sequence[float]] | None = None,
-                  region_fraction: float = 0.5, spec: RobotSpec | None = None
+                  region_fraction: float = 0.5, spec: RobotSpec | None = None,
+                  offset: Sequence[float] | None = None
                   ) -> tuple[np.ndarray, list[dict[str, float]]]:
     """Motor babbling of the hands for the eye-hand map: ``n`` postures, each of one of
     ``arms`` (in turn) with its 7 joints (and the 3 trunk joints with ``trunk``, as
@@ -170,10 +188,12 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
     it (the others are drawn again: babbling directed at that region). Returns the hand
     positions (n, 3) [m] in root_link (``provider``'s forward kinematics, e.g.
     :class:`~icub_pmp.pmp.pinocchio_provider.PinocchioJacobianProvider`) and the postures
-    {joint: rad} (the trunk moves the head the gaze looks from).
+    {joint: rad} (the trunk moves the head the gaze looks from). With ``offset`` (3,) [m] the
+    babbled point is that point of the hand frame (a marker, a held tool's tip), not its
+    origin.
 
     Raises :class:`InvalidInput` for no arm, ``n`` < 1, a fraction outside [0, 1] or a region
-    the hands do not reach (none of 1,000 babbles per wanted posture in it)."""
+    the hands do not reach (none of 5,000 babbles per wanted posture in it)."""
     spec = spec or RobotSpec.load()
     if int(n) < 1 or not arms or not 0.0 <= region_fraction <= 1.0:
         raise InvalidInput(f"babbled_hands: need n >= 1, an arm and a region fraction in "
@@ -190,10 +210,14 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
         arm = arms[k % len(arms)]
         joints = spec.arm_joints(arm) + (spec.torso_joints if trunk else ())
         idx = [names.index(j) for j in joints]
-        for _ in range(1000):
+        for _ in range(5000):
             q = q0.copy()
             q[idx] = rng.uniform(provider.lower[idx], provider.upper[idx])
-            hand = provider.positions(q, [spec.hand_frame(arm)])[0]
+            if offset is None:
+                hand = provider.positions(q, [spec.hand_frame(arm)])[0]
+            else:
+                kin = provider.kinematics(q, [spec.hand_frame(arm)])
+                hand = kin.positions[0] + kin.rotations[0] @ np.asarray(offset, dtype=float)
             if k >= n_region or bool(np.all((hand >= lo) & (hand <= hi))):
                 break
         else:
@@ -202,6 +226,13 @@ def babbled_hands(n: int, seed: int, provider, arms: Sequence[str] = ("right", "
         hands[k] = hand
         postures.append(dict(zip(names, (float(v) for v in q))))
     return hands, postures
+
+
+def gaze_lag_offset(rng: np.random.Generator, lag: float) -> np.ndarray:
+    """Where the gaze fixates relative to the hand it follows: a point (3,) [m] uniform in the
+    ball of radius ``lag`` [m] (the gaze lags the moving hand)."""
+    off = rng.normal(size=3)
+    return off * lag * rng.uniform() ** (1.0 / 3.0) / max(float(np.linalg.norm(off)), 1e-12)
 
 
 def gaze_samples(n: int, seed: int, eyes: EyeKinematics, gaze, hands: np.ndarray,
@@ -230,8 +261,7 @@ def gaze_samples(n: int, seed: int, eyes: EyeKinematics, gaze, hands: np.ndarray
         k += 1
         i = int(rng.integers(len(hands)))
         h = hands[i]
-        off = rng.normal(size=3)
-        off *= lag * rng.uniform() ** (1.0 / 3.0) / max(float(np.linalg.norm(off)), 1e-12)
+        off = gaze_lag_offset(rng, lag)
         try:
             sol = gaze.solve(h + off, postures[i])
         except InvalidInput:  # the fixation point is behind the head or too near the eyes

@@ -91,3 +91,24 @@ class MarkerDetector:
             return _NONE
         u, v = centroids[k + 1]
         return MarkerDetection(True, float(u), float(v), int(areas[k]))
+
+    def detect_near(self, rgb: np.ndarray, uv: tuple[float, float], radius: float
+                    ) -> MarkerDetection:
+        """Centroid of the marker-coloured blob (of at least ``min_area`` px) nearest to the
+        pixel ``uv`` [px], if within ``radius`` [px] of it: which of several markers in view
+        (both hands carry one) is the one expected there."""
+        if not (np.all(np.isfinite(uv)) and radius > 0):
+            raise InvalidInput(f"detect_near: expected a finite pixel and radius > 0, got "
+                               f"{uv}, {radius}")
+        n, _, stats, centroids = cv2.connectedComponentsWithStats(self.mask(rgb), 8)
+        best, best_d = 0, float(radius)
+        for k in range(1, n):
+            if stats[k, cv2.CC_STAT_AREA] < self.config.min_area:
+                continue
+            d = float(np.hypot(*(centroids[k] - np.asarray(uv, dtype=float))))
+            if d <= best_d:
+                best, best_d = k, d
+        if best == 0:
+            return _NONE
+        u, v = centroids[best]
+        return MarkerDetection(True, float(u), float(v), int(stats[best, cv2.CC_STAT_AREA]))

@@ -48,9 +48,11 @@ class SceneFrame:
 class TableScene:
     """Pose and render the simulator's scene (module doc)."""
 
-    def __init__(self, realism: "RealismConfig | None" = None) -> None:
+    def __init__(self, realism: "RealismConfig | None" = None, config=None) -> None:
         """``realism``: the simulator's imperfections (camera miscalibration and pixel noise
-        as ``sim_bridge`` renders them; None = the ideal cameras)."""
+        as ``sim_bridge`` renders them; None = the ideal cameras); ``config``: the
+        simulator's :class:`~icub_sim_bridge.sim_config.SimConfig` (None = the defaults; e.g.
+        another ``hand_marker_offset``: a marker on a held tool)."""
         os.environ.setdefault("MUJOCO_GL", "egl")
         import mujoco
 
@@ -61,7 +63,7 @@ class TableScene:
 
         self._mj = mujoco
         self._eye_cameras = EYE_CAMERAS
-        self.sim = Simulator(SimConfig(), realism=realism)
+        self.sim = Simulator(config or SimConfig(), realism=realism)
         self.camera = self.sim.built.camera
         self._renderer = CameraRenderer(self.sim.model, self.camera, threaded=False)
         self._seg = mujoco.Renderer(self.sim.model, self.camera.height, self.camera.width)
@@ -85,13 +87,29 @@ class TableScene:
         for name, p in self._placed.items():
             self.sim.set_object_pose(name, p)
 
-    def render(self) -> SceneFrame:
-        """Render both eyes and the objects' true pixels."""
+    def table_away(self, away: bool = True) -> None:
+        """Take the table out of the cameras' view (``away``: 2 m down) or put it back where
+        the scene has it (a babbling robot's hand below the table top is then seen)."""
         mj = self._mj
+        body = mj.mj_name2id(self.sim.model, mj.mjtObj.mjOBJ_BODY, "table")
+        if not hasattr(self, "_table_pos"):
+            self._table_pos = self.sim.model.body_pos[body].copy()
+        self.sim.model.body_pos[body] = self._table_pos + (0.0, 0.0, -2.0 if away else 0.0)
+        mj.mj_forward(self.sim.model, self.sim.data)
+
+    def render_eyes(self) -> dict[str, np.ndarray]:
+        """Both eyes' images {'left', 'right': (H, W, 3) uint8 RGB} as ``sim_bridge`` publishes
+        them (with the realism's pixel noise), without the objects' masks."""
         images = self._renderer.render(self.sim.data)
         imp = self.sim.imperfections
         if imp is not None:  # realism: pixel noise, as sim_bridge publishes the images
             images = {side: imp.noisy_image(img) for side, img in images.items()}
+        return images
+
+    def render(self) -> SceneFrame:
+        """Render both eyes and the objects' true pixels."""
+        mj = self._mj
+        images = self.render_eyes()
         masks: dict[str, dict[str, np.ndarray]] = {o: {} for o in self._geoms}
         for side in ("left", "right"):
             self._seg.update_scene(self.sim.data, camera=self._eye_cameras[side],
