@@ -104,6 +104,22 @@ def test_a_still_pair_of_partial_measurements_is_not_the_goal():
     assert settled_still_estimate(seq[3:], after=1.10) is seq[4]
 
 
+def test_a_missed_still_target_says_what_the_estimates_were():
+    """No settled still target: the failure names what came after the stop (per state), the
+    still ones' points against the partial bound, and where the last estimate was (a held
+    target the region search lost), so a failed run can be read without a bag."""
+    from icub_pmp.demo.scenario import estimates_summary
+
+    x = -0.33
+    seq = [_visual_target(0.90, "moving", x, 2000), _visual_target(1.05, "held", x, points=0),
+           _visual_target(1.10, "still", x + 0.01, 500), _visual_target(1.15, "held", x, 0)]
+    text = estimates_summary(seq, after=1.0)
+    assert text.startswith("2 held, 1 still"), text
+    assert "still points 500-500 (most of any estimate 2000, partial below 600)" in text
+    assert "the last (held" in text and "[-0.33, 0.05, -0.03]" in text
+    assert estimates_summary(seq, after=2.0) == "no estimate stamped after it"
+
+
 def test_reaching_arm_is_the_one_on_the_objects_side() -> None:
     """An object left of the midline is reached with the left hand (a right hand reaching
     across the body passed over the resting left one and ended 2.1 cm off, seed 29 trial 19)."""

@@ -431,6 +431,9 @@ def estimates_summary(estimates: list, after: float) -> str:
                  f"partial below {STILL_MIN_POINTS_RATIO * most:.0f})")
         if step.size:
             text += f", still steps {step.min():.1f}-{step.max():.1f} mm"
+    last = late[-1]
+    text += (f"; the last ({last.state}, source {last.source or '?'}) at "
+             f"{np.round([last.position.x, last.position.y, last.position.z], 3).tolist()}")
     return text
 
 
