@@ -65,7 +65,7 @@ esac
 # picks another domain instead of talking to this graph
 DOMAIN="${ROS_DOMAIN_ID:-42}"
 if [[ "$DOMAIN" =~ ^[0-9]+$ ]] && (( DOMAIN >= 1 && DOMAIN <= 100 )); then
-  coproc LOCK { exec python3 "$ROOT/scripts/hold_domain_lock.py" "$DOMAIN"; }
+  coproc LOCK { exec "$ROOT/scripts/env.sh" python "$ROOT/scripts/hold_domain_lock.py" "$DOMAIN"; }
   PIDS+=("$LOCK_PID")
   read -r -t 10 _ <&"${LOCK[0]}" || true  # "held" (or "taken") once the port is bound
 fi

@@ -7,7 +7,8 @@ The tests reserve their ROS_DOMAIN_ID by binding the TCP port ``PORT_BASE + id``
 hand that holds the port of its domain is never given to a test, which would otherwise talk to
 it. Usage: ``hold_domain_lock.py ID``. Prints ``held`` once the port is bound (or ``taken``,
 with a warning on stderr, and exits when another process holds it); then waits until killed or
-until its parent is gone (a graph.sh killed with SIGKILL leaves no lock behind).
+until its parent is gone (a graph.sh killed with SIGKILL leaves no lock behind). Runs in
+scripts/env.sh (domain_coordinator's PORT_BASE, the one the tests use).
 """
 
 import os
@@ -15,7 +16,7 @@ import socket
 import sys
 import time
 
-PORT_BASE = 32768  # domain_coordinator.impl.PORT_BASE
+from domain_coordinator.impl import PORT_BASE
 
 domain = int(sys.argv[1])
 parent = os.getppid()
