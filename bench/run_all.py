@@ -45,9 +45,12 @@ def _commit() -> str:
     return out.stdout.strip() + ("+dirty" if dirty else "")
 
 
-def run_one(name: str, timeout: float) -> dict:
-    """Run bench/<name>.py --quick; returns the stored record (raises on failure)."""
-    cmd = [str(ROOT / "scripts" / "env.sh"), "python", f"bench/{name}.py", "--quick"]
+def run_one(name: str, timeout: float, entry: dict | None = None) -> dict:
+    """Run bench/<name>.py --quick (or the registry ``entry``'s ``script`` with its ``args``:
+    a second row of one benchmark script); returns the stored record (raises on failure)."""
+    entry = entry or {}
+    script = [f"bench/{entry.get('script', name)}.py", *entry.get("args", []), "--quick"]
+    cmd = [str(ROOT / "scripts" / "env.sh"), "python", *script]
     LOGS.mkdir(parents=True, exist_ok=True)
     load0 = os.getloadavg()[0]
     t0 = time.monotonic()
@@ -56,11 +59,11 @@ def run_one(name: str, timeout: float) -> dict:
                               timeout=timeout)
     lines = [ln for ln in proc.stdout.splitlines() if ln.strip().startswith("{")]
     if proc.returncode != 0 or not lines:
-        raise RuntimeError(f"bench/{name}.py --quick failed (exit {proc.returncode}); see "
+        raise RuntimeError(f"{' '.join(script)} failed (exit {proc.returncode}); see "
                            f"{LOGS / (name + '.log')}")
     return {
         "benchmark": name,
-        "command": f"scripts/env.sh python bench/{name}.py --quick",
+        "command": "scripts/env.sh python " + " ".join(script),
         "commit": _commit(),
         "date": dt.datetime.now().strftime("%Y-%m-%d %H:%M"),
         "load": [round(load0, 2), round(os.getloadavg()[0], 2)],
@@ -160,7 +163,7 @@ def main(argv: list[str] | None = None) -> int:
         for name in names:
             print(f"run_all: {name} ...", file=sys.stderr, flush=True)
             try:
-                rec = run_one(name, args.timeout)
+                rec = run_one(name, args.timeout, registry[name])
             except (RuntimeError, subprocess.TimeoutExpired) as exc:
                 print(f"run_all: {exc}", file=sys.stderr)
                 failed.append(name)
